@@ -145,4 +145,24 @@ fn worked_examples_match_the_protocol_doc() {
         Command::Vibrate { duration_ms: 500 }.encode().as_bytes(),
         b"!V01F48E\r"
     );
+    assert_eq!(
+        Command::Beep {
+            frequency_hz: 2000,
+            duration_ms: 100
+        }
+        .encode()
+        .as_bytes(),
+        b"!B07D000647A\r"
+    );
+    assert_eq!(
+        Command::IrLeds { on: true }.encode().as_bytes(),
+        b"!L01A0\r"
+    );
+    assert_eq!(
+        Command::IrLeds { on: false }.encode().as_bytes(),
+        b"!L00A7\r"
+    );
+    assert_eq!(Command::RequestStatus.encode().as_bytes(), b"!SBE\r");
+    assert_eq!(Command::Start.encode().as_bytes(), b"=");
+    assert_eq!(Command::Stop.encode().as_bytes(), b":");
 }

@@ -1,0 +1,3 @@
+//! The `fires` subcommands, one module each.
+
+pub mod decode;

@@ -1,0 +1,51 @@
+//! `fires`: the FIRES command-line tool.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod cli;
+
+/// FIRES: track a smart-pen with two cameras, turn the drawn curves into surfaces.
+#[derive(Debug, Parser)]
+#[command(
+    name = "fires",
+    version,
+    about = "FIRES: track a smart-pen with two cameras and turn the curves it draws into surfaces",
+    after_help = "Examples:\n  fires decode samples/pen-stream.bin      decode a captured pen stream\n  \
+                  cat /dev/rfcomm0 | fires decode -        decode a live Bluetooth serial port\n\n\
+                  Errors go to standard error as one line; the exit code is 2."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Decode raw pen link bytes into one JSON line per packet, then a summary line.
+    Decode(cli::decode::DecodeArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Decode(args) => cli::decode::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("fires: error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// A closed standard output (`fires decode x | head`) ends the program quietly.
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}

@@ -1,0 +1,20 @@
+//! Arbitrary bytes into the stream decoder: it must not panic, every frame it emits must be 22 input bytes
+//! verbatim, and its byte accounting must balance.
+#![no_main]
+
+use fires_protocol::StreamDecoder;
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let mut d = StreamDecoder::new();
+    let mut frames = Vec::new();
+    d.feed(data, |f| frames.push(f));
+    frames.extend(d.finish());
+    for f in &frames {
+        let end = f.end_offset as usize;
+        assert!(end >= 22 && end <= data.len());
+        assert_eq!(&data[end - 22..end], &f.frame.encode()[..]);
+    }
+    let s = d.stats();
+    assert_eq!(22 * (s.sensor_frames + s.status_frames + s.duplicates) + s.bytes_skipped, data.len() as u64);
+});
