@@ -1,4 +1,5 @@
 //! FIRES host library: everything between the pen's bytes and the strokes the reconstruction consumes
 //! (architecture.md §1). The `fires` binary (src/main.rs) is a thin command-line layer over it.
 
+pub mod clock;
 pub mod link;

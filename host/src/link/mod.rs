@@ -1,5 +1,7 @@
 //! The pen link: decoding the byte stream the pen sends (hardware-docs/protocol.md).
 
 pub mod packet_json;
+pub mod serial;
 
 pub use packet_json::{PacketLine, SummaryLine};
+pub use serial::{LinkError, LinkEvent, SerialConfig, SerialLink};
