@@ -143,13 +143,46 @@ impl StreamDecoder {
         self.settle()
     }
 
-    /// Feeds a slice, calling `sink` for every frame released.
+    /// Feeds a slice, calling `sink` for every frame released. Same result as [`Self::push`] byte by byte;
+    /// whole aligned frames take a fast path.
     pub fn feed(&mut self, bytes: &[u8], mut sink: impl FnMut(Decoded)) {
-        for &b in bytes {
-            if let Some(d) = self.push(b) {
+        let mut rest = bytes;
+        while let Some((&first, tail)) = rest.split_first() {
+            if self.len == 0 {
+                if let Some(frame) = rest.first_chunk::<FRAME_LEN>() {
+                    if self.take_aligned_frame(frame, &mut sink) {
+                        rest = &rest[FRAME_LEN..];
+                        continue;
+                    }
+                }
+            }
+            if let Some(d) = self.push(first) {
                 sink(d);
             }
+            rest = tail;
         }
+    }
+
+    /// With nothing buffered, consumes a whole valid frame at once, exactly as 22 pushes would.
+    fn take_aligned_frame(
+        &mut self,
+        frame: &[u8; FRAME_LEN],
+        sink: &mut impl FnMut(Decoded),
+    ) -> bool {
+        if frame[0] != SYNC0 || !is_sync1(frame[1]) || xor(frame) != 0 {
+            return false;
+        }
+        self.offset += 2;
+        if let Some(d) = self.release_on_sync() {
+            sink(d);
+        }
+        self.offset += (FRAME_LEN - 2) as u64;
+        self.buf = *frame;
+        self.len = FRAME_LEN;
+        if let Some(d) = self.accept_candidate() {
+            sink(d);
+        }
+        true
     }
 
     /// Ends the stream: releases a locked last frame and counts the unfinished tail as skipped.

@@ -269,6 +269,16 @@ proptest! {
     }
 
     #[test]
+    fn feeding_slices_equals_pushing_bytes(sent in session(true, true)) {
+        let bytes = wire(&sent);
+        let (fed, _) = decode(&bytes);
+        let mut d = StreamDecoder::new();
+        let mut pushed: Vec<_> = bytes.iter().filter_map(|&b| d.push(b)).collect();
+        pushed.extend(d.finish());
+        prop_assert_eq!(fed, pushed);
+    }
+
+    #[test]
     fn slices_and_single_bytes_decode_alike(sent in session(true, true), cut in 0usize..4096) {
         let bytes = wire(&sent);
         let (whole, _) = decode(&bytes);

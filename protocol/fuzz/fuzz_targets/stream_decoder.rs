@@ -1,5 +1,5 @@
 //! Arbitrary bytes into the stream decoder: it must not panic, every frame it emits must be 22 input bytes
-//! verbatim, and its byte accounting must balance.
+//! verbatim, its byte accounting must balance, and the slice fast path must equal byte-by-byte pushing.
 #![no_main]
 
 use fires_protocol::StreamDecoder;
@@ -15,6 +15,10 @@ fuzz_target!(|data: &[u8]| {
         assert!(end >= 22 && end <= data.len());
         assert_eq!(&data[end - 22..end], &f.frame.encode()[..]);
     }
+    let mut p = StreamDecoder::new();
+    let mut pushed: Vec<_> = data.iter().filter_map(|&b| p.push(b)).collect();
+    pushed.extend(p.finish());
+    assert_eq!(pushed, frames);
     let s = d.stats();
     assert_eq!(22 * (s.sensor_frames + s.status_frames + s.duplicates) + s.bytes_skipped, data.len() as u64);
 });
