@@ -15,6 +15,7 @@
 pub mod generate;
 pub mod geometry;
 pub mod mesh;
+pub mod operators;
 pub mod solve;
 
 pub use geometry::Vec3;

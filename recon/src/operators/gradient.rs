@@ -1,0 +1,71 @@
+//! Per-face gradient and per-vertex (integrated) divergence (seed-002-part1 §1.2–1.3).
+//!
+//! On a triangle `T = (i, j, k)` the gradient of the hat function of `i` is
+//! `ω^i_T = N_T × (X_k − X_j) / (2|T|)` (§1.2 cross-check form), so
+//! `∇_T f = Σ ω^k_T f_k`. The divergence of a per-face vector field `V` at vertex `i` is
+//! the integrated `−Σ_T |T| ω^i_T · V_T`, i.e. `D = −Gᵀ·diag(|T|)`, which makes
+//! `D·G = C` (the cotangent matrix) exactly.
+
+use super::{triangles, OperatorError};
+use crate::geometry::triangle_normal;
+use crate::mesh::SurfaceMesh;
+use crate::solve::{sparse_from_triplets, SparseMatrix};
+
+/// Per-face area and hat-function gradients of every triangle, `None` for a degenerate one.
+pub(crate) fn hat_gradients(
+    mesh: &SurfaceMesh,
+    tris: &[[usize; 3]],
+) -> Vec<Option<(f64, [crate::Vec3; 3])>> {
+    let p = mesh.positions();
+    tris.iter()
+        .map(|&[a, b, c]| {
+            let n = triangle_normal(p[a], p[b], p[c]);
+            let n2 = n.norm_squared();
+            if !(n2 > 0.0 && n2.is_finite()) {
+                return None;
+            }
+            let g = |from: usize, to: usize| n.cross(p[to] - p[from]) / n2;
+            Some((0.5 * n2.sqrt(), [g(b, c), g(c, a), g(a, b)]))
+        })
+        .collect()
+}
+
+/// The `3F × V` gradient matrix: row `3f + c` is the `c`-th coordinate of the gradient on
+/// face `f` (degenerate faces get zero rows).
+pub fn gradient_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorError> {
+    let tris = triangles(mesh)?;
+    let mut t = Vec::with_capacity(tris.len() * 9);
+    for (f, (tri, g)) in tris.iter().zip(hat_gradients(mesh, &tris)).enumerate() {
+        let Some((_, grads)) = g else { continue };
+        for k in 0..3 {
+            for c in 0..3 {
+                t.push((3 * f + c, tri[k], grads[k][c]));
+            }
+        }
+    }
+    Ok(sparse_from_triplets(
+        3 * tris.len(),
+        mesh.vertices_size(),
+        &t,
+    )?)
+}
+
+/// The `V × 3F` integrated divergence `−Gᵀ·diag(|T|)` of per-face vector fields laid out as
+/// in [`gradient_matrix`].
+pub fn divergence_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorError> {
+    let tris = triangles(mesh)?;
+    let mut t = Vec::with_capacity(tris.len() * 9);
+    for (f, (tri, g)) in tris.iter().zip(hat_gradients(mesh, &tris)).enumerate() {
+        let Some((area, grads)) = g else { continue };
+        for k in 0..3 {
+            for c in 0..3 {
+                t.push((tri[k], 3 * f + c, -area * grads[k][c]));
+            }
+        }
+    }
+    Ok(sparse_from_triplets(
+        mesh.vertices_size(),
+        3 * tris.len(),
+        &t,
+    )?)
+}
