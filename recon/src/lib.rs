@@ -14,6 +14,7 @@
 
 pub mod generate;
 pub mod geometry;
+pub mod io;
 pub mod mesh;
 pub mod operators;
 pub mod solve;

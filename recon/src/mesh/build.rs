@@ -14,7 +14,15 @@ impl SurfaceMesh {
     /// than three distinct vertices, a directed edge used twice (a non-manifold edge or
     /// inconsistent orientation), and vertices whose faces do not form one fan.
     pub fn from_faces<F: AsRef<[usize]>>(points: &[Vec3], faces: &[F]) -> Result<Self, MeshError> {
-        let n_he: usize = faces.iter().map(|f| f.as_ref().len()).sum();
+        Self::from_face_slices(points, faces.iter().map(|f| f.as_ref()))
+    }
+
+    /// [`Self::from_faces`] for any source of index slices (e.g. a flat polygon soup).
+    pub fn from_face_slices<'a>(
+        points: &[Vec3],
+        faces: impl Iterator<Item = &'a [usize]> + Clone,
+    ) -> Result<Self, MeshError> {
+        let n_he: usize = faces.clone().map(|f| f.len()).sum();
         if points.len() >= INVALID as usize || n_he.saturating_mul(2) >= INVALID as usize {
             return Err(MeshError::TooLarge);
         }
@@ -23,8 +31,8 @@ impl SurfaceMesh {
             mesh.add_vertex(p);
         }
         let mut directed: HashMap<(u32, u32), Halfedge> = HashMap::with_capacity(n_he);
-        for (fi, face) in faces.iter().enumerate() {
-            mesh.add_indexed_face(fi, face.as_ref(), &mut directed)?;
+        for (fi, face) in faces.enumerate() {
+            mesh.add_indexed_face(fi, face, &mut directed)?;
         }
         mesh.link_boundary_halfedges()?;
         mesh.check_vertex_fans()?;
