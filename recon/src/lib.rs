@@ -12,12 +12,14 @@
 //! * [`subdivide`]: Loop subdivision;
 //! * [`bench`]: solver timing used by `fires bench solve|laplacian`.
 
+pub mod bench;
 pub mod generate;
 pub mod geometry;
 pub mod io;
 pub mod mesh;
 pub mod operators;
 pub mod solve;
+pub mod subdivide;
 
 pub use geometry::Vec3;
 pub use mesh::SurfaceMesh;

@@ -53,6 +53,9 @@ pub enum OperatorError {
     /// A source vertex is out of range or deleted.
     #[error("invalid source vertex {0}")]
     InvalidVertex(Vertex),
+    /// Building a mesh failed.
+    #[error(transparent)]
+    Mesh(#[from] crate::mesh::MeshError),
     /// The linear solve failed.
     #[error(transparent)]
     Solve(#[from] SolveError),
