@@ -337,17 +337,34 @@ struct Binary<R> {
 }
 
 impl<R: Read> Binary<R> {
-    fn scalar(&mut self, s: Scalar) -> Result<f64, IoError> {
-        let n = s.size();
-        if let Err(e) = self.r.read_exact(&mut self.buf[..n]) {
+    fn bytes(&mut self, out: &mut [u8]) -> Result<(), IoError> {
+        if let Err(e) = self.r.read_exact(out) {
             return Err(match e.kind() {
                 std::io::ErrorKind::UnexpectedEof => IoError::binary(self.offset, "truncated file"),
                 _ => IoError::Io(e),
             });
         }
-        self.offset += n as u64;
-        Ok(s.decode(&self.buf[..n], self.little))
+        self.offset += out.len() as u64;
+        Ok(())
     }
+
+    fn scalar(&mut self, s: Scalar) -> Result<f64, IoError> {
+        let mut b = self.buf;
+        self.bytes(&mut b[..s.size()])?;
+        Ok(s.decode(&b[..s.size()], self.little))
+    }
+}
+
+/// Byte offset of every scalar property in a record, or `None` if the element has lists.
+fn fixed_layout(e: &Element) -> Option<(usize, Vec<(usize, Scalar)>)> {
+    let mut off = 0;
+    let mut layout = Vec::with_capacity(e.props.len());
+    for p in &e.props {
+        let Kind::Scalar(s) = p.kind else { return None };
+        layout.push((off, s));
+        off += s.size();
+    }
+    Some((off, layout))
 }
 
 fn read_binary_body<R: Read>(
@@ -355,12 +372,25 @@ fn read_binary_body<R: Read>(
     header: &Header,
     sink: &mut Sink<'_>,
 ) -> Result<(), IoError> {
+    let mut record = Vec::new();
     for e in &header.elements {
         let roles = roles(e);
         let xyz = has_xyz(&roles);
+        let fixed = fixed_layout(e);
         for _ in 0..e.count {
             let start = r.offset;
             let at = |m: String| IoError::binary(start, m);
+            if let Some((size, layout)) = &fixed {
+                record.resize(*size, 0);
+                r.bytes(&mut record)?;
+                for (&(off, s), &role) in layout.iter().zip(&roles) {
+                    if let Role::Coord(c) = role {
+                        sink.coord(c, s.decode(&record[off..], r.little), at)?;
+                    }
+                }
+                sink.end_record(e, xyz);
+                continue;
+            }
             for (p, &role) in e.props.iter().zip(&roles) {
                 match (&p.kind, role) {
                     (Kind::Scalar(s), Role::Coord(c)) => {
@@ -372,14 +402,16 @@ fn read_binary_body<R: Read>(
                     }
                     (Kind::List(cs, is), role) => {
                         let n = check_degree(r.scalar(*cs)?, at)?;
-                        for _ in 0..n {
-                            let v = r.scalar(*is)?;
-                            if role == Role::Faces {
-                                if is.is_float() {
-                                    return Err(at("face indices must be integers".into()));
-                                }
-                                sink.index(v, at)?;
-                            }
+                        record.resize(n * is.size(), 0);
+                        r.bytes(&mut record)?;
+                        if role != Role::Faces {
+                            continue;
+                        }
+                        if is.is_float() {
+                            return Err(at("face indices must be integers".into()));
+                        }
+                        for k in 0..n {
+                            sink.index(is.decode(&record[k * is.size()..], r.little), at)?;
                         }
                     }
                 }

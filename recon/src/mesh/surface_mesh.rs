@@ -144,7 +144,7 @@ impl SurfaceMesh {
     /// An outgoing halfedge of `v` (a boundary one if `v` is on the boundary), or `None`
     /// for an isolated vertex.
     pub fn vertex_halfedge(&self, v: Vertex) -> Option<Halfedge> {
-        opt(self.vertex_out[v.idx()], |i| Halfedge(i))
+        opt(self.vertex_out[v.idx()], Halfedge)
     }
     /// The vertex a halfedge points to.
     pub fn to_vertex(&self, h: Halfedge) -> Vertex {

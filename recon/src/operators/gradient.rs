@@ -37,9 +37,9 @@ pub fn gradient_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorError
     let mut t = Vec::with_capacity(tris.len() * 9);
     for (f, (tri, g)) in tris.iter().zip(hat_gradients(mesh, &tris)).enumerate() {
         let Some((_, grads)) = g else { continue };
-        for k in 0..3 {
-            for c in 0..3 {
-                t.push((3 * f + c, tri[k], grads[k][c]));
+        for (&v, g) in tri.iter().zip(grads) {
+            for (c, gc) in g.to_array().into_iter().enumerate() {
+                t.push((3 * f + c, v, gc));
             }
         }
     }
@@ -57,9 +57,9 @@ pub fn divergence_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorErr
     let mut t = Vec::with_capacity(tris.len() * 9);
     for (f, (tri, g)) in tris.iter().zip(hat_gradients(mesh, &tris)).enumerate() {
         let Some((area, grads)) = g else { continue };
-        for k in 0..3 {
-            for c in 0..3 {
-                t.push((tri[k], 3 * f + c, -area * grads[k][c]));
+        for (&v, g) in tri.iter().zip(grads) {
+            for (c, gc) in g.to_array().into_iter().enumerate() {
+                t.push((v, 3 * f + c, -area * gc));
             }
         }
     }

@@ -93,11 +93,11 @@ impl FixedSolver {
     }
 }
 
+/// `(slot of every index, known indices, unknown indices)`.
+type Partition = (Vec<usize>, Vec<usize>, Vec<usize>);
+
 /// Maps each index to its slot in the unknown or known list (known slots offset by n).
-fn partition(
-    n: usize,
-    known: &[usize],
-) -> Result<(Vec<usize>, Vec<usize>, Vec<usize>), SolveError> {
+fn partition(n: usize, known: &[usize]) -> Result<Partition, SolveError> {
     let mut slot = vec![NONE; n];
     let mut kept_known = Vec::new();
     for &k in known {
