@@ -1,7 +1,7 @@
 //! Measures the issue-6 figures until the `fires` CLI wires them up.
 //!
 //! ```text
-//! cargo run --release -p fires-recon --example bench -- solve MATRIX.mtx [--runs N] [--threads T]
+//! cargo run --release -p fires-recon --example bench -- solve MATRIX.mtx [--runs N] [--threads T] [--mode auto|simplicial|supernodal]
 //! cargo run --release -p fires-recon --example bench -- laplacian MESH [--subdivide K] [--runs N] [--threads T] [--export OUT.mtx]
 //! cargo run --release -p fires-recon --example bench -- ply-read MESH [--subdivide K] [--runs N]
 //! ```
@@ -12,10 +12,11 @@ use std::num::NonZeroUsize;
 use std::time::Instant;
 
 use faer::Par;
-use fires_recon::bench::{bench_solve_matrix, laplacian_system, load_subdivided, BenchError};
+use fires_recon::bench::{bench_solve_matrix_with, laplacian_system, load_subdivided, BenchError};
 use fires_recon::io::{
     read_matrix_market, read_ply, write_matrix_market_lower, write_ply, PlyEncoding, PolygonSoup,
 };
+use fires_recon::solve::{CholeskyOptions, FactorMode};
 
 fn flag(args: &[String], name: &str) -> Option<String> {
     args.iter()
@@ -36,6 +37,19 @@ fn par(args: &[String]) -> Par {
     }
 }
 
+fn options(args: &[String]) -> CholeskyOptions {
+    let mode = match flag(args, "--mode").as_deref() {
+        Some("simplicial") => FactorMode::Simplicial,
+        Some("supernodal") => FactorMode::Supernodal,
+        _ => FactorMode::Auto,
+    };
+    CholeskyOptions {
+        par: par(args),
+        mode,
+        ..Default::default()
+    }
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (Some(cmd), Some(path)) = (args.first(), args.get(1)) else {
@@ -49,7 +63,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mtx = read_matrix_market(BufReader::new(File::open(path)?))?;
             println!(
                 "{}",
-                bench_solve_matrix(&mtx.lower_triangle()?, runs, par(&args))?.to_json_line()
+                bench_solve_matrix_with(&mtx.lower_triangle()?, runs, options(&args))?
+                    .to_json_line()
             );
         }
         "laplacian" => {
@@ -67,7 +82,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             println!(
                 "{}",
-                bench_solve_matrix(&a, runs, par(&args))?.to_json_line()
+                bench_solve_matrix_with(&a, runs, options(&args))?.to_json_line()
             );
         }
         "ply-read" => ply_read(path, k, runs)?,

@@ -89,15 +89,25 @@ pub fn bench_solve_matrix(
     runs: usize,
     par: Par,
 ) -> Result<SolveTimings, BenchError> {
-    let n = lower.nrows();
-    if lower.ncols() != n {
-        return Err(BenchError::NotSquare(n, lower.ncols()));
-    }
     let options = CholeskyOptions {
         side: Side::Lower,
         par,
         ..Default::default()
     };
+    bench_solve_matrix_with(lower, runs, options)
+}
+
+/// [`bench_solve_matrix`] with explicit solver options (parallelism, factor mode).
+pub fn bench_solve_matrix_with(
+    lower: &SparseMatrix,
+    runs: usize,
+    options: CholeskyOptions,
+) -> Result<SolveTimings, BenchError> {
+    let par = options.par;
+    let n = lower.nrows();
+    if lower.ncols() != n {
+        return Err(BenchError::NotSquare(n, lower.ncols()));
+    }
     let rhs = Mat::from_fn(n, 3, |i, j| 1.0 + ((i * (j + 3)) % 17) as f64);
     let (mut a, mut f, mut s) = (Vec::new(), Vec::new(), Vec::new());
     let mut l_nnz = 0;

@@ -6,12 +6,16 @@ use std::sync::Arc;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltError;
 use faer::linalg::cholesky::llt::factor::LltError;
+use faer::reborrow::ReborrowMut;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, LdltRef, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky,
+    SymmetricOrdering,
 };
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::SparseColMatRef;
 use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
 
+use super::supernodal_solve::solve_supernodal_llt;
 use super::SolveError;
 
 /// Which factorisation to compute.
@@ -24,6 +28,18 @@ pub enum Factorization {
     Ldlt,
 }
 
+/// Simplicial (column by column) or supernodal (dense blocks) factor storage.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FactorMode {
+    /// faer decides from the estimated flop count per nonzero (its default threshold).
+    #[default]
+    Auto,
+    /// Always simplicial.
+    Simplicial,
+    /// Always supernodal.
+    Supernodal,
+}
+
 /// Options of [`CholeskySolver`].
 #[derive(Debug, Clone, Copy)]
 pub struct CholeskyOptions {
@@ -33,6 +49,8 @@ pub struct CholeskyOptions {
     pub side: Side,
     /// Parallelism for factorisation and solves. Default `Par::Seq` (see module docs).
     pub par: Par,
+    /// Simplicial or supernodal storage.
+    pub mode: FactorMode,
 }
 
 impl Default for CholeskyOptions {
@@ -41,6 +59,7 @@ impl Default for CholeskyOptions {
             factorization: Factorization::Llt,
             side: Side::Lower,
             par: Par::Seq,
+            mode: FactorMode::Auto,
         }
     }
 }
@@ -70,13 +89,15 @@ impl CholeskySolver {
                 a.ncols()
             )));
         }
-        let symbolic = factorize_symbolic_cholesky(
-            a.symbolic(),
-            options.side,
-            SymmetricOrdering::Amd,
-            Default::default(),
-        )
-        .map_err(|_| SolveError::OutOfMemory)?;
+        let mut params = CholeskySymbolicParams::default();
+        params.supernodal_flop_ratio_threshold = match options.mode {
+            FactorMode::Auto => params.supernodal_flop_ratio_threshold,
+            FactorMode::Simplicial => SupernodalThreshold::FORCE_SIMPLICIAL,
+            FactorMode::Supernodal => SupernodalThreshold::FORCE_SUPERNODAL,
+        };
+        let symbolic =
+            factorize_symbolic_cholesky(a.symbolic(), options.side, SymmetricOrdering::Amd, params)
+                .map_err(|_| SolveError::OutOfMemory)?;
         Ok(Self {
             symbolic: Arc::new(symbolic),
             col_ptr: a.col_ptr().to_vec(),
@@ -190,7 +211,7 @@ impl CholeskySolver {
     }
 
     /// Solves `A X = B` in place for every column of `rhs` at once.
-    pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) -> Result<(), SolveError> {
+    pub fn solve_in_place(&self, mut rhs: MatMut<'_, f64>) -> Result<(), SolveError> {
         if !self.factored {
             return Err(SolveError::NotFactorized);
         }
@@ -200,6 +221,11 @@ impl CholeskySolver {
                 rhs.nrows(),
                 self.dim()
             )));
+        }
+        if self.options.factorization == Factorization::Llt
+            && self.solve_llt_columnwise(rhs.rb_mut())
+        {
+            return Ok(());
         }
         let par = self.options.par;
         let req = self
@@ -214,6 +240,13 @@ impl CholeskySolver {
                 .solve_in_place_with_conj(Conj::No, rhs, par, stack),
         }
         Ok(())
+    }
+
+    /// Sequential supernodal LLᵀ solve through [`solve_supernodal_llt`]; `false` if the
+    /// factor is simplicial or the caller asked for threads.
+    fn solve_llt_columnwise(&self, rhs: MatMut<'_, f64>) -> bool {
+        matches!(self.options.par, Par::Seq)
+            && solve_supernodal_llt(&self.symbolic, &self.values, rhs)
     }
 
     /// Solves `A X = B`, returning `X`.

@@ -18,8 +18,9 @@ mod error;
 mod fixed;
 mod least_squares;
 mod sparse;
+mod supernodal_solve;
 
-pub use cholesky::{CholeskyOptions, CholeskySolver, Factorization};
+pub use cholesky::{CholeskyOptions, CholeskySolver, FactorMode, Factorization};
 pub use error::SolveError;
 pub use fixed::FixedSolver;
 pub use least_squares::LeastSquaresSolver;
