@@ -160,6 +160,8 @@ fn hostile_inputs_give_errors_not_panics() {
     let ascii = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n3 0 0 5\n";
     assert!(err(read_ply(Cursor::new(ascii))).contains("out of range"));
     assert!(read_ply(Cursor::new("ply\nformat ascii 1.0\nelement vertex 1\n")).is_err());
+    let empty = "ply\nformat binary_little_endian 1.0\nelement face 1000000000\nend_header\n";
+    assert!(err(read_ply(Cursor::new(empty))).contains("no properties"));
     assert!(read_ply(Cursor::new(
         "ply\nformat ascii 1.0\nelement vertex 99999999999999999999\nend_header\n"
     ))

@@ -109,6 +109,15 @@ pub fn read_matrix_market<R: BufRead>(reader: R) -> Result<MatrixMarket, IoError
     let nrows = check_count("rows", parse_usize(t.next(), ln, "row count")? as u64)?;
     let ncols = check_count("columns", parse_usize(t.next(), ln, "column count")? as u64)?;
     let nnz = check_count("entries", parse_usize(t.next(), ln, "entry count")? as u64)?;
+    for (what, value) in [("rows", nrows), ("columns", ncols)] {
+        if value as u64 > limits::MAX_MATRIX_DIM {
+            return Err(IoError::Limit {
+                what,
+                value: value as u64,
+                limit: limits::MAX_MATRIX_DIM,
+            });
+        }
+    }
     let mut entries = Vec::with_capacity(nnz.min(limits::RESERVE_CAP));
     for _ in 0..nnz {
         let (ln, l) = lines.require_content_line("the entries")?;

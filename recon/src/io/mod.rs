@@ -38,6 +38,8 @@ pub mod limits {
     pub const MAX_ELEMENTS: u64 = (u32::MAX / 4) as u64;
     /// Largest polygon degree accepted.
     pub const MAX_FACE_DEGREE: usize = 1 << 16;
+    /// Largest Matrix Market dimension (the column pointer array is allocated from it).
+    pub const MAX_MATRIX_DIM: u64 = 1 << 26;
     /// Longest text line accepted, in bytes.
     pub const MAX_LINE: usize = 1 << 20;
 }

@@ -163,6 +163,14 @@ fn parse_header<R: BufRead>(lines: &mut Lines<R>) -> Result<Header, IoError> {
         }
     }
     let encoding = encoding.ok_or_else(|| IoError::syntax(lines.line, "missing format line"))?;
+    // A record without properties occupies no bytes: a huge count would spin (and grow
+    // the face list) without reading anything.
+    if let Some(e) = elements.iter().find(|e| e.count > 0 && e.props.is_empty()) {
+        return Err(IoError::syntax(
+            lines.line,
+            format!("element `{}` has no properties", truncate(&e.name)),
+        ));
+    }
     Ok(Header { encoding, elements })
 }
 
