@@ -230,3 +230,44 @@ fn obtuse_and_degenerate_triangles_give_finite_operators() {
     assert!(mean_curvature(&m).unwrap().iter().all(|x| x.is_finite()));
     assert!(gradient_matrix(&m).is_ok());
 }
+
+#[test]
+fn hat_gradients_match_the_metric_tensor_form() {
+    // ω^{j1} = g¹¹e1 + g¹²e2, ω^{j2} = g²¹e1 + g²²e2 (seed-002-part1 §1.2, eq. 1.7).
+    let pts = [
+        Vec3::new(0.1, -0.2, 0.3),
+        Vec3::new(1.3, 0.1, -0.2),
+        Vec3::new(0.4, 0.9, 0.5),
+    ];
+    let m = SurfaceMesh::from_faces(&pts, &[[0, 1, 2]]).unwrap();
+    let g = gradient_matrix(&m).unwrap().to_dense();
+    let (e1, e2) = (pts[1] - pts[0], pts[2] - pts[0]);
+    let (a, b, d) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let det = a * d - b * b;
+    let (g11, g12, g22) = (d / det, -b / det, a / det);
+    let w1 = e1 * g11 + e2 * g12;
+    let w2 = e1 * g12 + e2 * g22;
+    let w0 = -(w1 + w2);
+    for (k, w) in [w0, w1, w2].iter().enumerate() {
+        for c in 0..3 {
+            assert!((g[(c, k)] - w[c]).abs() < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn vertex_gradient_is_exact_for_linear_functions_and_kills_constants() {
+    let m = perturbed_grid();
+    let w = vertex_gradient_matrix(&m).unwrap();
+    let lin: Vec<f64> = m
+        .positions()
+        .iter()
+        .map(|p| -1.5 * p.x + 0.25 * p.y + 4.0)
+        .collect();
+    let gl = apply(&w, &lin);
+    let gc = apply(&w, &vec![1.0; m.n_vertices()]);
+    for v in 0..m.n_vertices() {
+        assert!((gl[3 * v] + 1.5).abs() < 1e-9 && (gl[3 * v + 1] - 0.25).abs() < 1e-9);
+        assert!(gc[3 * v..3 * v + 3].iter().all(|x| x.abs() < 1e-9));
+    }
+}

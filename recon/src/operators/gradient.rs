@@ -69,3 +69,34 @@ pub fn divergence_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorErr
         &t,
     )?)
 }
+
+/// The thesis's per-vertex gradient `W = D_W·W^s` (seed-002-part1 §1.2, eqs. 1.5, 1.9–1.10,
+/// with the **[FIX]** diagonal sign): the area-weighted average of the face gradients
+/// around each vertex, as a `3V × V` matrix (row `3i + c`). Its transpose-free use
+/// `div V ≈ Σ_c W_c V_c` (§1.3) and the 2-ring Laplacian `W·W` follow from it.
+pub fn vertex_gradient_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorError> {
+    let tris = triangles(mesh)?;
+    let n = mesh.vertices_size();
+    let grads = hat_gradients(mesh, &tris);
+    let mut ring_area = vec![0.0; n];
+    for (tri, g) in tris.iter().zip(&grads) {
+        if let Some((area, _)) = g {
+            for &v in tri {
+                ring_area[v] += area;
+            }
+        }
+    }
+    let mut t = Vec::with_capacity(tris.len() * 27);
+    for (tri, g) in tris.iter().zip(&grads) {
+        let Some((area, w)) = g else { continue };
+        for &i in tri {
+            let scale = area / ring_area[i];
+            for (&j, wj) in tri.iter().zip(w) {
+                for (c, wc) in wj.to_array().into_iter().enumerate() {
+                    t.push((3 * i + c, j, scale * wc));
+                }
+            }
+        }
+    }
+    Ok(sparse_from_triplets(3 * n, n, &t)?)
+}

@@ -33,7 +33,7 @@ pub use curvature::{
     angle_defects, gaussian_curvature, mean_curvature, mean_curvature_normals, principal_curvatures,
 };
 pub use geodesic::{geodesic_dijkstra, geodesic_heat, HeatGeodesic};
-pub use gradient::{divergence_matrix, gradient_matrix};
+pub use gradient::{divergence_matrix, gradient_matrix, vertex_gradient_matrix};
 pub use laplacians::{laplacian, LaplacianKind};
 pub use mass::{mass_matrix, vertex_areas, MassKind};
 pub use normals::{face_normals, vertex_normals, NormalWeighting};
