@@ -1,7 +1,8 @@
 //! Measures the issue-6 figures until the `fires` CLI wires them up.
 //!
 //! ```text
-//! cargo run --release -p fires-recon --example bench -- solve MATRIX.mtx [--runs N] [--threads T] [--mode auto|simplicial|supernodal]
+//! cargo run --release -p fires-recon --example bench -- solve MATRIX.mtx [--runs N] [--threads T]
+//!     [--mode auto|simplicial|supernodal] [--kernel auto|faer|columnwise]
 //! cargo run --release -p fires-recon --example bench -- laplacian MESH [--subdivide K] [--runs N] [--threads T] [--export OUT.mtx]
 //! cargo run --release -p fires-recon --example bench -- ply-read MESH [--subdivide K] [--runs N]
 //! ```
@@ -16,7 +17,7 @@ use fires_recon::bench::{bench_solve_matrix_with, laplacian_system, load_subdivi
 use fires_recon::io::{
     read_matrix_market, read_ply, write_matrix_market_lower, write_ply, PlyEncoding, PolygonSoup,
 };
-use fires_recon::solve::{CholeskyOptions, FactorMode};
+use fires_recon::solve::{CholeskyOptions, FactorMode, SolveKernel};
 
 fn flag(args: &[String], name: &str) -> Option<String> {
     args.iter()
@@ -43,9 +44,15 @@ fn options(args: &[String]) -> CholeskyOptions {
         Some("supernodal") => FactorMode::Supernodal,
         _ => FactorMode::Auto,
     };
+    let kernel = match flag(args, "--kernel").as_deref() {
+        Some("faer") => SolveKernel::Faer,
+        Some("columnwise") => SolveKernel::Columnwise,
+        _ => SolveKernel::Auto,
+    };
     CholeskyOptions {
         par: par(args),
         mode,
+        kernel,
         ..Default::default()
     }
 }

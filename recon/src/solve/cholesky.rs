@@ -15,7 +15,7 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::SparseColMatRef;
 use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
 
-use super::supernodal_solve::solve_supernodal_llt;
+use super::supernodal_solve::{prefers_columnwise, solve_supernodal_llt};
 use super::SolveError;
 
 /// Which factorisation to compute.
@@ -40,6 +40,19 @@ pub enum FactorMode {
     Supernodal,
 }
 
+/// Which triangular-solve kernel a supernodal LLᵀ factor uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SolveKernel {
+    /// Column-wise when the factor's supernodes are narrow (see `supernodal_solve`),
+    /// faer's dense per-supernode kernels otherwise.
+    #[default]
+    Auto,
+    /// Always faer's solve.
+    Faer,
+    /// Always the column-wise solve (sequential LLᵀ supernodal factors only).
+    Columnwise,
+}
+
 /// Options of [`CholeskySolver`].
 #[derive(Debug, Clone, Copy)]
 pub struct CholeskyOptions {
@@ -51,6 +64,8 @@ pub struct CholeskyOptions {
     pub par: Par,
     /// Simplicial or supernodal storage.
     pub mode: FactorMode,
+    /// Triangular-solve kernel for supernodal LLᵀ factors.
+    pub kernel: SolveKernel,
 }
 
 impl Default for CholeskyOptions {
@@ -60,6 +75,7 @@ impl Default for CholeskyOptions {
             side: Side::Lower,
             par: Par::Seq,
             mode: FactorMode::Auto,
+            kernel: SolveKernel::Auto,
         }
     }
 }
@@ -245,7 +261,13 @@ impl CholeskySolver {
     /// Sequential supernodal LLᵀ solve through [`solve_supernodal_llt`]; `false` if the
     /// factor is simplicial or the caller asked for threads.
     fn solve_llt_columnwise(&self, rhs: MatMut<'_, f64>) -> bool {
-        matches!(self.options.par, Par::Seq)
+        let wanted = match self.options.kernel {
+            SolveKernel::Faer => false,
+            SolveKernel::Columnwise => true,
+            SolveKernel::Auto => prefers_columnwise(&self.symbolic),
+        };
+        wanted
+            && matches!(self.options.par, Par::Seq)
             && solve_supernodal_llt(&self.symbolic, &self.values, rhs)
     }
 

@@ -20,7 +20,7 @@ mod least_squares;
 mod sparse;
 mod supernodal_solve;
 
-pub use cholesky::{CholeskyOptions, CholeskySolver, FactorMode, Factorization};
+pub use cholesky::{CholeskyOptions, CholeskySolver, FactorMode, Factorization, SolveKernel};
 pub use error::SolveError;
 pub use fixed::FixedSolver;
 pub use least_squares::LeastSquaresSolver;

@@ -51,6 +51,38 @@ fn supernodes<'a>(
     Some(out)
 }
 
+/// Supernode statistics: `(stored values in supernodes of width ≥ 16, all stored values)`.
+pub(crate) fn wide_fraction(symbolic: &SymbolicCholesky<usize>) -> (usize, usize) {
+    let SymbolicCholeskyRaw::Supernodal(s) = symbolic.raw() else {
+        return (0, 0);
+    };
+    let ptr = s.col_ptr_for_val();
+    let (mut wide, mut all) = (0, 0);
+    for (k, (b, e)) in s
+        .supernode_begin()
+        .iter()
+        .zip(s.supernode_end())
+        .enumerate()
+    {
+        let len = ptr.get(k + 1).zip(ptr.get(k)).map_or(0, |(hi, lo)| hi - lo);
+        all += len;
+        if e - b >= WIDE {
+            wide += len;
+        }
+    }
+    (wide, all)
+}
+
+/// Width from which a supernode counts as wide.
+const WIDE: usize = 16;
+
+/// True when most of the factor lives in narrow supernodes, where the column-wise solve
+/// beats per-supernode dense kernels.
+pub(crate) fn prefers_columnwise(symbolic: &SymbolicCholesky<usize>) -> bool {
+    let (wide, all) = wide_fraction(symbolic);
+    all > 0 && (wide as f64) < 0.5 * all as f64
+}
+
 /// Solves `A x = b` for every column of `rhs` with `A = Pᵀ L Lᵀ P` (`P` the factor's
 /// fill-reducing permutation). Returns `false`, leaving `rhs` untouched, if the factor is
 /// not supernodal.
