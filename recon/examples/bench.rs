@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! cargo run --release -p fires-recon --example bench -- solve MATRIX.mtx [--runs N] [--threads T]
-//!     [--mode auto|simplicial|supernodal] [--kernel auto|faer|columnwise]
+//!     [--mode auto|simplicial|supernodal] [--kernel auto|faer]
 //! cargo run --release -p fires-recon --example bench -- laplacian MESH [--subdivide K] [--runs N] [--threads T] [--export OUT.mtx]
 //! cargo run --release -p fires-recon --example bench -- ply-read MESH [--subdivide K] [--runs N]
 //! ```
@@ -46,7 +46,6 @@ fn options(args: &[String]) -> CholeskyOptions {
     };
     let kernel = match flag(args, "--kernel").as_deref() {
         Some("faer") => SolveKernel::Faer,
-        Some("columnwise") => SolveKernel::Columnwise,
         _ => SolveKernel::Auto,
     };
     CholeskyOptions {

@@ -15,7 +15,7 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::SparseColMatRef;
 use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
 
-use super::supernodal_solve::{prefers_columnwise, solve_supernodal_llt};
+use super::supernodal_solve::solve_supernodal_llt;
 use super::SolveError;
 
 /// Which factorisation to compute.
@@ -43,14 +43,12 @@ pub enum FactorMode {
 /// Which triangular-solve kernel a supernodal LLᵀ factor uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SolveKernel {
-    /// Column-wise when the factor's supernodes are narrow (see `supernodal_solve`),
-    /// faer's dense per-supernode kernels otherwise.
+    /// The hybrid column-wise/dense solve of `supernodal_solve` for sequential LLᵀ
+    /// supernodal factors, faer's solve otherwise.
     #[default]
     Auto,
     /// Always faer's solve.
     Faer,
-    /// Always the column-wise solve (sequential LLᵀ supernodal factors only).
-    Columnwise,
 }
 
 /// Options of [`CholeskySolver`].
@@ -263,8 +261,7 @@ impl CholeskySolver {
     fn solve_llt_columnwise(&self, rhs: MatMut<'_, f64>) -> bool {
         let wanted = match self.options.kernel {
             SolveKernel::Faer => false,
-            SolveKernel::Columnwise => true,
-            SolveKernel::Auto => prefers_columnwise(&self.symbolic),
+            SolveKernel::Auto => true,
         };
         wanted
             && matches!(self.options.par, Par::Seq)

@@ -1,15 +1,21 @@
 //! Triangular solves with a supernodal LLᵀ factor, column by column.
 //!
 //! faer's supernodal solve runs a small dense TRSM + GEMM per supernode; on mesh
-//! Laplacians (many small supernodes) and 1–4 right-hand sides that overhead dominates,
-//! and the same factor solved column by column (like a simplicial solve, but reading
-//! faer's supernodal storage directly) is faster. The right-hand sides are
+//! Laplacians (tens of thousands of supernodes, most 1–15 columns wide) and 1–4
+//! right-hand sides that per-call overhead dominates. Here narrow supernodes are solved
+//! column by column straight from faer's supernodal storage (gathering/scattering the
+//! below-diagonal rows once per supernode) and only supernodes of ≥ 32 columns use faer's
+//! dense kernels. The right-hand sides are
 //! processed `K ≤ 4` at a time, interleaved row-major so each row update touches one
 //! cache line.
 
+use faer::linalg::matmul::matmul;
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+};
 use faer::reborrow::ReborrowMut;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
-use faer::MatMut;
+use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 /// One supernode: first column, width, its below-diagonal row pattern and its values
 /// (column-major, `width + pattern.len()` rows).
@@ -49,38 +55,6 @@ fn supernodes<'a>(
         });
     }
     Some(out)
-}
-
-/// Supernode statistics: `(stored values in supernodes of width ≥ 16, all stored values)`.
-pub(crate) fn wide_fraction(symbolic: &SymbolicCholesky<usize>) -> (usize, usize) {
-    let SymbolicCholeskyRaw::Supernodal(s) = symbolic.raw() else {
-        return (0, 0);
-    };
-    let ptr = s.col_ptr_for_val();
-    let (mut wide, mut all) = (0, 0);
-    for (k, (b, e)) in s
-        .supernode_begin()
-        .iter()
-        .zip(s.supernode_end())
-        .enumerate()
-    {
-        let len = ptr.get(k + 1).zip(ptr.get(k)).map_or(0, |(hi, lo)| hi - lo);
-        all += len;
-        if e - b >= WIDE {
-            wide += len;
-        }
-    }
-    (wide, all)
-}
-
-/// Width from which a supernode counts as wide.
-const WIDE: usize = 16;
-
-/// True when most of the factor lives in narrow supernodes, where the column-wise solve
-/// beats per-supernode dense kernels.
-pub(crate) fn prefers_columnwise(symbolic: &SymbolicCholesky<usize>) -> bool {
-    let (wide, all) = wide_fraction(symbolic);
-    all > 0 && (wide as f64) < 0.5 * all as f64
 }
 
 /// Solves `A x = b` for every column of `rhs` with `A = Pᵀ L Lᵀ P` (`P` the factor's
@@ -142,6 +116,10 @@ fn solve_block<const K: usize>(
 fn forward<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
     let mut tmp: Vec<[f64; K]> = Vec::new();
     for s in nodes {
+        if s.width >= DENSE_WIDTH {
+            forward_dense(s, w);
+            continue;
+        }
         let rows = s.width + s.pattern.len();
         tmp.clear();
         tmp.resize(s.pattern.len(), [0.0; K]);
@@ -171,6 +149,10 @@ fn forward<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
 fn backward<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
     let mut tmp: Vec<[f64; K]> = Vec::new();
     for s in nodes.iter().rev() {
+        if s.width >= DENSE_WIDTH {
+            backward_dense(s, w);
+            continue;
+        }
         let rows = s.width + s.pattern.len();
         tmp.clear();
         tmp.extend(s.pattern.iter().map(|&r| w[r]));
@@ -189,6 +171,56 @@ fn backward<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
             }
             w[s.start + jj] = acc;
         }
+    }
+}
+
+/// Supernodes at least this wide go through faer's dense TRSM/GEMM kernels.
+const DENSE_WIDTH: usize = 32;
+
+/// The diagonal block and the below-diagonal block of a supernode as faer views.
+fn blocks<'a>(s: &Supernode<'a>) -> (MatRef<'a, f64>, MatRef<'a, f64>) {
+    MatRef::from_column_major_slice(s.values, s.width + s.pattern.len(), s.width)
+        .split_at_row(s.width)
+}
+
+fn forward_dense<const K: usize>(s: &Supernode<'_>, w: &mut [[f64; K]]) {
+    let (top, bot) = blocks(s);
+    let mut xt = Mat::from_fn(s.width, K, |i, c| w[s.start + i][c]);
+    solve_lower_triangular_in_place(top, xt.as_mut(), Par::Seq);
+    let mut tmp = Mat::zeros(s.pattern.len(), K);
+    matmul(
+        tmp.as_mut(),
+        Accum::Replace,
+        bot,
+        xt.as_ref(),
+        1.0,
+        Par::Seq,
+    );
+    for i in 0..s.width {
+        w[s.start + i] = std::array::from_fn(|c| xt[(i, c)]);
+    }
+    for (p, &r) in s.pattern.iter().enumerate() {
+        for c in 0..K {
+            w[r][c] -= tmp[(p, c)];
+        }
+    }
+}
+
+fn backward_dense<const K: usize>(s: &Supernode<'_>, w: &mut [[f64; K]]) {
+    let (top, bot) = blocks(s);
+    let tmp = Mat::from_fn(s.pattern.len(), K, |p, c| w[s.pattern[p]][c]);
+    let mut xt = Mat::from_fn(s.width, K, |i, c| w[s.start + i][c]);
+    matmul(
+        xt.as_mut(),
+        Accum::Add,
+        bot.transpose(),
+        tmp.as_ref(),
+        -1.0,
+        Par::Seq,
+    );
+    solve_upper_triangular_in_place(top.transpose(), xt.as_mut(), Par::Seq);
+    for i in 0..s.width {
+        w[s.start + i] = std::array::from_fn(|c| xt[(i, c)]);
     }
 }
 
