@@ -1,0 +1,7 @@
+//! Small fixed-size geometry: a plain `Vec3` and triangle helpers used by every operator.
+
+mod triangle;
+mod vec3;
+
+pub use triangle::{cot_of_angle_between, triangle_angles, triangle_area, triangle_normal};
+pub use vec3::Vec3;

@@ -1,0 +1,25 @@
+//! # fires-recon: the FIRES geometry core
+//!
+//! Everything reconstruction and editing stand on (architecture.md §5):
+//! * [`mesh`]: an index-based halfedge [`mesh::SurfaceMesh`] with properties, circulators,
+//!   Euler operations, garbage collection and `validate()`;
+//! * [`io`]: OBJ, OFF, PLY and STL readers/writers and Matrix Market;
+//! * [`generate`]: analytic test meshes (icosphere, UV sphere, torus, cylinder, grid, cube);
+//! * [`operators`]: Laplacians, mass matrices, gradient/divergence, normals, curvatures,
+//!   geodesic distance, all returning faer sparse matrices or plain vectors;
+//! * [`solve`]: sparse Cholesky with symbolic reuse, fixed-value (Dirichlet) elimination and
+//!   stacked least squares (libigl's precompute/solve split);
+//! * [`subdivide`]: Loop subdivision;
+//! * [`bench`]: solver timing used by `fires bench solve|laplacian`.
+
+pub mod bench;
+pub mod generate;
+pub mod geometry;
+pub mod io;
+pub mod mesh;
+pub mod operators;
+pub mod solve;
+pub mod subdivide;
+
+pub use geometry::Vec3;
+pub use mesh::SurfaceMesh;

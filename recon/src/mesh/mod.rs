@@ -1,0 +1,24 @@
+//! Index-based halfedge surface mesh (architecture.md §5; model: pmp-library's
+//! `SurfaceMesh`, geometry-central's attribute arrays).
+//!
+//! * [`SurfaceMesh`] stores connectivity in flat arrays addressed by typed handles
+//!   ([`Vertex`], [`Halfedge`], [`Edge`], [`Face`]); twins are implicit (`h ^ 1`).
+//! * Polygon faces of any degree are supported; the Euler operations that only make sense
+//!   on triangles say so.
+//! * Deleted elements stay in the arrays, flagged, until [`SurfaceMesh::garbage_collection`].
+
+mod build;
+mod circulators;
+mod error;
+mod euler;
+mod garbage;
+mod handles;
+mod properties;
+mod surface_mesh;
+mod validate;
+
+pub use circulators::{FaceHalfedges, VertexHalfedges};
+pub use error::MeshError;
+pub use handles::{Edge, Face, Halfedge, Vertex};
+pub use properties::{Property, PropertyContainer};
+pub use surface_mesh::SurfaceMesh;

@@ -1,0 +1,284 @@
+//! Sparse Cholesky (LLᵀ / LDLᵀ) with symbolic analysis reused across numeric
+//! refactorisations; factor once, solve many right-hand sides.
+
+use std::sync::Arc;
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::ldlt::factor::LdltError;
+use faer::linalg::cholesky::llt::factor::LltError;
+use faer::reborrow::ReborrowMut;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky,
+    SymmetricOrdering,
+};
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::SparseColMatRef;
+use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
+
+use super::supernodal_solve::solve_supernodal_llt;
+use super::SolveError;
+
+/// Which factorisation to compute.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Factorization {
+    /// `A = L Lᵀ`; fails with [`SolveError::NotPositiveDefinite`] unless `A` is SPD.
+    #[default]
+    Llt,
+    /// `A = L D Lᵀ` with unit `L`; needs only non-zero pivots.
+    Ldlt,
+}
+
+/// Simplicial (column by column) or supernodal (dense blocks) factor storage.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FactorMode {
+    /// faer decides from the estimated flop count per nonzero (its default threshold).
+    #[default]
+    Auto,
+    /// Always simplicial.
+    Simplicial,
+    /// Always supernodal.
+    Supernodal,
+}
+
+/// Which triangular-solve kernel a supernodal LLᵀ factor uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SolveKernel {
+    /// The hybrid column-wise/dense solve of `supernodal_solve` for sequential LLᵀ
+    /// supernodal factors, faer's solve otherwise.
+    #[default]
+    Auto,
+    /// Always faer's solve.
+    Faer,
+}
+
+/// Options of [`CholeskySolver`].
+#[derive(Debug, Clone, Copy)]
+pub struct CholeskyOptions {
+    /// LLᵀ or LDLᵀ.
+    pub factorization: Factorization,
+    /// Which triangle of the input is read (the other is ignored).
+    pub side: Side,
+    /// Parallelism for factorisation and solves. Default `Par::Seq` (see module docs).
+    pub par: Par,
+    /// Simplicial or supernodal storage.
+    pub mode: FactorMode,
+    /// Triangular-solve kernel for supernodal LLᵀ factors.
+    pub kernel: SolveKernel,
+}
+
+impl Default for CholeskyOptions {
+    fn default() -> Self {
+        Self {
+            factorization: Factorization::Llt,
+            side: Side::Lower,
+            par: Par::Seq,
+            mode: FactorMode::Auto,
+            kernel: SolveKernel::Auto,
+        }
+    }
+}
+
+/// A symmetric sparse factorisation: [`Self::analyze`] once per pattern,
+/// [`Self::factorize`] per set of values, [`Self::solve_in_place`] per right-hand side.
+#[derive(Debug, Clone)]
+pub struct CholeskySolver {
+    symbolic: Arc<SymbolicCholesky<usize>>,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    options: CholeskyOptions,
+    values: Vec<f64>,
+    factored: bool,
+}
+
+impl CholeskySolver {
+    /// Symbolic analysis (AMD ordering, elimination tree, supernodes) of `a`'s pattern.
+    pub fn analyze(
+        a: SparseColMatRef<'_, usize, f64>,
+        options: CholeskyOptions,
+    ) -> Result<Self, SolveError> {
+        if a.nrows() != a.ncols() {
+            return Err(SolveError::Dimension(format!(
+                "{}x{} matrix is not square",
+                a.nrows(),
+                a.ncols()
+            )));
+        }
+        let mut params = CholeskySymbolicParams::default();
+        params.supernodal_flop_ratio_threshold = match options.mode {
+            FactorMode::Auto => params.supernodal_flop_ratio_threshold,
+            FactorMode::Simplicial => SupernodalThreshold::FORCE_SIMPLICIAL,
+            FactorMode::Supernodal => SupernodalThreshold::FORCE_SUPERNODAL,
+        };
+        let symbolic =
+            factorize_symbolic_cholesky(a.symbolic(), options.side, SymmetricOrdering::Amd, params)
+                .map_err(|_| SolveError::OutOfMemory)?;
+        Ok(Self {
+            symbolic: Arc::new(symbolic),
+            col_ptr: a.col_ptr().to_vec(),
+            row_idx: a.row_idx().to_vec(),
+            options,
+            values: Vec::new(),
+            factored: false,
+        })
+    }
+
+    /// Analysis followed by numeric factorisation.
+    pub fn new(
+        a: SparseColMatRef<'_, usize, f64>,
+        options: CholeskyOptions,
+    ) -> Result<Self, SolveError> {
+        let mut s = Self::analyze(a, options)?;
+        s.factorize(a)?;
+        Ok(s)
+    }
+
+    /// Matrix dimension.
+    pub fn dim(&self) -> usize {
+        self.symbolic.nrows()
+    }
+
+    /// Number of stored entries of the factor `L` (fill), for reporting.
+    pub fn factor_len(&self) -> usize {
+        self.symbolic.len_val()
+    }
+
+    /// A copy of this solver sharing the symbolic analysis but with no numeric factor.
+    pub fn share_symbolic(&self) -> Self {
+        Self {
+            values: Vec::new(),
+            factored: false,
+            ..self.clone()
+        }
+    }
+
+    /// Numeric factorisation of `a`, which must have exactly the analysed pattern.
+    pub fn factorize(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<(), SolveError> {
+        if a.col_ptr() != self.col_ptr.as_slice()
+            || a.row_idx() != self.row_idx.as_slice()
+            || a.col_nnz().is_some()
+        {
+            return Err(SolveError::PatternChanged);
+        }
+        self.factored = false;
+        self.values.clear();
+        self.values
+            .try_reserve_exact(self.symbolic.len_val())
+            .map_err(|_| SolveError::OutOfMemory)?;
+        self.values.resize(self.symbolic.len_val(), 0.0);
+        let par = self.options.par;
+        match self.options.factorization {
+            Factorization::Llt => self.factorize_llt(a, par)?,
+            Factorization::Ldlt => self.factorize_ldlt(a, par)?,
+        }
+        self.factored = true;
+        Ok(())
+    }
+
+    fn factorize_llt(
+        &mut self,
+        a: SparseColMatRef<'_, usize, f64>,
+        par: Par,
+    ) -> Result<(), SolveError> {
+        let req = self
+            .symbolic
+            .factorize_numeric_llt_scratch::<f64>(par, Default::default());
+        let mut mem = MemBuffer::try_new(req).map_err(|_| SolveError::OutOfMemory)?;
+        let r = self.symbolic.factorize_numeric_llt::<f64>(
+            &mut self.values,
+            a,
+            self.options.side,
+            Default::default(),
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        );
+        match r {
+            Ok(_) => Ok(()),
+            Err(LltError::NonPositivePivot { index }) => {
+                Err(SolveError::NotPositiveDefinite { column: index })
+            }
+        }
+    }
+
+    fn factorize_ldlt(
+        &mut self,
+        a: SparseColMatRef<'_, usize, f64>,
+        par: Par,
+    ) -> Result<(), SolveError> {
+        let req = self
+            .symbolic
+            .factorize_numeric_ldlt_scratch::<f64>(par, Default::default());
+        let mut mem = MemBuffer::try_new(req).map_err(|_| SolveError::OutOfMemory)?;
+        let r = self.symbolic.factorize_numeric_ldlt::<f64>(
+            &mut self.values,
+            a,
+            self.options.side,
+            Default::default(),
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        );
+        match r {
+            Ok(_) => Ok(()),
+            Err(LdltError::ZeroPivot { index }) => Err(SolveError::Singular { column: index }),
+        }
+    }
+
+    /// Solves `A X = B` in place for every column of `rhs` at once.
+    pub fn solve_in_place(&self, mut rhs: MatMut<'_, f64>) -> Result<(), SolveError> {
+        if !self.factored {
+            return Err(SolveError::NotFactorized);
+        }
+        if rhs.nrows() != self.dim() {
+            return Err(SolveError::Dimension(format!(
+                "rhs has {} rows, matrix {}",
+                rhs.nrows(),
+                self.dim()
+            )));
+        }
+        if self.options.factorization == Factorization::Llt
+            && self.solve_llt_columnwise(rhs.rb_mut())
+        {
+            return Ok(());
+        }
+        let par = self.options.par;
+        let req = self
+            .symbolic
+            .solve_in_place_scratch::<f64>(rhs.ncols(), par);
+        let mut mem = MemBuffer::try_new(req).map_err(|_| SolveError::OutOfMemory)?;
+        let stack = MemStack::new(&mut mem);
+        match self.options.factorization {
+            Factorization::Llt => LltRef::new(&self.symbolic, &self.values)
+                .solve_in_place_with_conj(Conj::No, rhs, par, stack),
+            Factorization::Ldlt => LdltRef::new(&self.symbolic, &self.values)
+                .solve_in_place_with_conj(Conj::No, rhs, par, stack),
+        }
+        Ok(())
+    }
+
+    /// Sequential supernodal LLᵀ solve through [`solve_supernodal_llt`]; `false` if the
+    /// factor is simplicial or the caller asked for threads.
+    fn solve_llt_columnwise(&self, rhs: MatMut<'_, f64>) -> bool {
+        let wanted = match self.options.kernel {
+            SolveKernel::Faer => false,
+            SolveKernel::Auto => true,
+        };
+        wanted
+            && matches!(self.options.par, Par::Seq)
+            && solve_supernodal_llt(&self.symbolic, &self.values, rhs)
+    }
+
+    /// Solves `A X = B`, returning `X`.
+    pub fn solve(&self, rhs: MatRef<'_, f64>) -> Result<Mat<f64>, SolveError> {
+        let mut x = rhs.to_owned();
+        self.solve_in_place(x.as_mut())?;
+        Ok(x)
+    }
+
+    /// Solves `A x = b` for one vector.
+    pub fn solve_vec(&self, b: &[f64]) -> Result<Vec<f64>, SolveError> {
+        let mut x = Mat::from_fn(b.len(), 1, |i, _| b[i]);
+        self.solve_in_place(x.as_mut())?;
+        Ok((0..b.len()).map(|i| x[(i, 0)]).collect())
+    }
+}

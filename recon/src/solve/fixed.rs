@@ -1,0 +1,142 @@
+//! Quadratic minimisation with fixed values (libigl `min_quad_with_fixed`).
+//!
+//! Solves `A x = b` where the entries `x_k` (k ∈ known) are prescribed: the known
+//! columns move to the right-hand side, `A_uu x_u = b_u − A_uk x_k`, and `A_uu` (SPD when
+//! `A` is symmetric positive semidefinite with every null-space component pinned) is
+//! factorised once; [`FixedSolver::solve`] then costs two triangular solves.
+
+use faer::sparse::SparseColMatRef;
+use faer::{Mat, MatRef};
+
+use super::sparse::{sparse_from_triplets, sparse_mul_dense, sparse_triplets};
+use super::{CholeskyOptions, CholeskySolver, SolveError, SparseMatrix};
+
+const NONE: usize = usize::MAX;
+
+/// Precomputed factorisation of `A_uu` for a fixed set of known indices.
+#[derive(Debug, Clone)]
+pub struct FixedSolver {
+    n: usize,
+    known: Vec<usize>,
+    unknown: Vec<usize>,
+    a_uk: SparseMatrix,
+    chol: CholeskySolver,
+}
+
+impl FixedSolver {
+    /// Splits `a` (full symmetric storage, `n × n`) by the `known` indices and factorises
+    /// the free block. Duplicate known indices are ignored.
+    pub fn precompute(
+        a: SparseColMatRef<'_, usize, f64>,
+        known: &[usize],
+        options: CholeskyOptions,
+    ) -> Result<Self, SolveError> {
+        let n = a.nrows();
+        if a.ncols() != n {
+            return Err(SolveError::Dimension("matrix is not square".into()));
+        }
+        let (slot, known, unknown) = partition(n, known)?;
+        let (a_uu, a_uk) = split_blocks(a, &slot, unknown.len(), known.len())?;
+        let chol = CholeskySolver::new(a_uu.as_ref(), options)?;
+        Ok(Self {
+            n,
+            known,
+            unknown,
+            a_uk,
+            chol,
+        })
+    }
+
+    /// Indices of the free unknowns, in the order of the reduced system.
+    pub fn unknown(&self) -> &[usize] {
+        &self.unknown
+    }
+
+    /// The known indices, in the order `known_values` rows are read.
+    pub fn known(&self) -> &[usize] {
+        &self.known
+    }
+
+    /// Solves for all columns of `b` (`n × c`) with `known_values` (`k × c`, rows in the
+    /// order of [`Self::known`]). Returns the full `n × c` solution.
+    pub fn solve(
+        &self,
+        b: MatRef<'_, f64>,
+        known_values: MatRef<'_, f64>,
+    ) -> Result<Mat<f64>, SolveError> {
+        let c = b.ncols();
+        if b.nrows() != self.n
+            || known_values.nrows() != self.known.len()
+            || known_values.ncols() != c
+        {
+            return Err(SolveError::Dimension(
+                "rhs or known values have the wrong shape".into(),
+            ));
+        }
+        let coupling = sparse_mul_dense(self.a_uk.as_ref(), known_values)?;
+        let mut rhs = Mat::from_fn(self.unknown.len(), c, |r, col| {
+            b[(self.unknown[r], col)] - coupling[(r, col)]
+        });
+        self.chol.solve_in_place(rhs.as_mut())?;
+        let mut x = Mat::zeros(self.n, c);
+        for (r, &i) in self.unknown.iter().enumerate() {
+            for col in 0..c {
+                x[(i, col)] = rhs[(r, col)];
+            }
+        }
+        for (r, &i) in self.known.iter().enumerate() {
+            for col in 0..c {
+                x[(i, col)] = known_values[(r, col)];
+            }
+        }
+        Ok(x)
+    }
+}
+
+/// `(slot of every index, known indices, unknown indices)`.
+type Partition = (Vec<usize>, Vec<usize>, Vec<usize>);
+
+/// Maps each index to its slot in the unknown or known list (known slots offset by n).
+fn partition(n: usize, known: &[usize]) -> Result<Partition, SolveError> {
+    let mut slot = vec![NONE; n];
+    let mut kept_known = Vec::new();
+    for &k in known {
+        if k >= n {
+            return Err(SolveError::IndexOutOfRange { index: k, size: n });
+        }
+        if slot[k] == NONE {
+            slot[k] = n + kept_known.len();
+            kept_known.push(k);
+        }
+    }
+    let mut unknown = Vec::with_capacity(n - kept_known.len());
+    for (i, s) in slot.iter_mut().enumerate() {
+        if *s == NONE {
+            *s = unknown.len();
+            unknown.push(i);
+        }
+    }
+    Ok((slot, kept_known, unknown))
+}
+
+fn split_blocks(
+    a: SparseColMatRef<'_, usize, f64>,
+    slot: &[usize],
+    nu: usize,
+    nk: usize,
+) -> Result<(SparseMatrix, SparseMatrix), SolveError> {
+    let n = slot.len();
+    let (mut uu, mut uk) = (Vec::new(), Vec::new());
+    for (i, j, v) in sparse_triplets(a) {
+        let (si, sj) = (slot[i], slot[j]);
+        match (si < n, sj < n) {
+            (true, true) => uu.push((si, sj, v)),
+            (true, false) => uk.push((si, sj - n, v)),
+            _ => {}
+        }
+    }
+    Ok((
+        sparse_from_triplets(nu, nu, &uu)?,
+        sparse_from_triplets(nu, nk, &uk)?,
+    ))
+}

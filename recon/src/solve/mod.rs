@@ -1,0 +1,29 @@
+//! Sparse solvers (seed-002-part1 §1.9; anchors-geometry §5–6; architecture.md §5).
+//!
+//! libigl's precompute/solve split on top of faer's sparse Cholesky:
+//! * [`CholeskySolver`]: symbolic analysis (AMD ordering, elimination tree, supernodes)
+//!   done once per sparsity pattern, numeric factorisation redone cheaply when only the
+//!   values change, and solves of many right-hand sides at once (x, y, z together);
+//! * [`FixedSolver`]: `min ½ xᵀAx − xᵀb` with some entries of `x` fixed (libigl
+//!   `min_quad_with_fixed`), eliminating the fixed rows so the system stays SPD;
+//! * [`LeastSquaresSolver`]: stacked soft constraints `Σ wₖ‖Aₖx − bₖ‖²` via the normal
+//!   equations.
+//!
+//! Threading: everything defaults to `Par::Seq`. On the 2-core machines here faer's
+//! parallel sparse solves were measured 10–16× slower than sequential ones (faer #211,
+//! anchors-geometry §6); parallelise across right-hand sides instead if needed.
+
+mod cholesky;
+mod error;
+mod fixed;
+mod least_squares;
+mod sparse;
+mod supernodal_solve;
+
+pub use cholesky::{CholeskyOptions, CholeskySolver, FactorMode, Factorization, SolveKernel};
+pub use error::SolveError;
+pub use fixed::FixedSolver;
+pub use least_squares::LeastSquaresSolver;
+pub use sparse::{
+    sparse_from_triplets, sparse_mul_dense, sparse_triplets, weighted_gram, SparseMatrix,
+};
