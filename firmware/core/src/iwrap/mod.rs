@@ -5,6 +5,7 @@ pub mod parser;
 pub mod provision;
 
 use embassy_time::{with_deadline, Instant};
+use fires_protocol::{Command, CommandParser};
 
 pub use parser::{Event, LineParser};
 pub use provision::{Action, Config, LinkChange, LinkMonitor, ProvisionError, Provisioner};
@@ -65,5 +66,88 @@ pub async fn provision_module<P: ModemPort>(
             Ok(Err(_)) => prov.on_event(Event::Garbage, Instant::now()),
             Err(_) => prov.on_time(Instant::now()),
         }
+    }
+}
+
+/// Splits the module's UART output after provisioning into link events and host commands.
+///
+/// Every byte goes to the iWRAP line parser (so `NO CARRIER` is seen even while the link carries data); bytes
+/// received while connected also go to the host command parser. Bytes received in command mode are never
+/// commands: module text such as the `:` of a Bluetooth address in `RING 0 00:07:80:..` must not stop the pen.
+#[derive(Debug, Default)]
+pub struct RxRouter {
+    lines: LineParser,
+    link: LinkMonitor,
+    commands: CommandParser,
+}
+
+impl RxRouter {
+    /// Not connected.
+    pub const fn new() -> Self {
+        RxRouter {
+            lines: LineParser::new(),
+            link: LinkMonitor::new(),
+            commands: CommandParser::new(),
+        }
+    }
+
+    /// Whether a host is connected.
+    pub fn connected(&self) -> bool {
+        self.link.connected()
+    }
+
+    /// Host command parser totals.
+    pub fn command_stats(&self) -> fires_protocol::CommandStats {
+        self.commands.stats()
+    }
+
+    /// Feeds one received byte.
+    pub fn push(&mut self, byte: u8) -> (Option<LinkChange>, Option<Command>) {
+        let cmd = if self.link.connected() {
+            self.commands.push(byte)
+        } else {
+            None
+        };
+        let change = self.lines.push(byte).and_then(|ev| self.link.on_event(ev));
+        if change == Some(LinkChange::Connected) {
+            self.commands = CommandParser::new();
+        }
+        (change, cmd)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::vec::Vec;
+
+    #[test]
+    fn connect_stream_and_drop_mid_stream() {
+        let mut r = RxRouter::new();
+        let mut transcript: Vec<u8> = Vec::new();
+        transcript.extend_from_slice(b"PAIR 00:1A:7D:DA:71:13 6b8e5a1c\r\n"); // colons: not commands
+        transcript.extend_from_slice(b"RING 0 00:1a:7d:da:71:13 1 RFCOMM\r\n");
+        transcript.extend_from_slice(b"=");
+        transcript.extend_from_slice(Command::Vibrate { duration_ms: 300 }.encode().as_bytes());
+        transcript.extend_from_slice(b"=NO CARRIER 0 ERROR 0 \r\n"); // link lost mid-stream
+        transcript.extend_from_slice(b":"); // command mode again: ignored
+        let mut changes = Vec::new();
+        let mut cmds = Vec::new();
+        for &b in &transcript {
+            let (c, k) = r.push(b);
+            changes.extend(c);
+            cmds.extend(k);
+        }
+        assert_eq!(changes, [LinkChange::Connected, LinkChange::Disconnected]);
+        assert_eq!(
+            cmds,
+            [
+                Command::Start,
+                Command::Vibrate { duration_ms: 300 },
+                Command::Start
+            ]
+        );
+        assert!(!r.connected());
     }
 }
