@@ -59,6 +59,15 @@ impl StatusReporter {
         self.refused
     }
 
+    /// Moves the periodic schedule on by one period without sending (no host is listening). Never schedules
+    /// into the past, so a stalled pen does not send a burst afterwards.
+    pub fn skip_periodic(&mut self, now: Instant) {
+        self.next_periodic += STATUS_PERIOD;
+        if self.next_periodic <= now {
+            self.next_periodic = now + STATUS_PERIOD;
+        }
+    }
+
     /// Builds the next status packet (consuming a sequence number).
     pub fn build(
         &mut self,
@@ -95,10 +104,7 @@ impl StatusReporter {
         sink: &mut impl FrameSink,
     ) -> bool {
         if reason == StatusReason::Periodic {
-            self.next_periodic += STATUS_PERIOD;
-            if self.next_periodic <= now {
-                self.next_periodic = now + STATUS_PERIOD;
-            }
+            self.skip_periodic(now);
         }
         let p = self.build(reason, inputs, framer, now.as_micros() as u32);
         let ok = sink.try_send(&p.encode());
