@@ -28,6 +28,7 @@ use embassy_embedded_hal::shared_bus::asynch::i2c::I2cDevice;
 use embassy_executor::Spawner;
 use embassy_futures::join::join;
 use embassy_futures::select::{select, select4, Either};
+use embassy_stm32::adc::{self, Adc, SampleTime};
 use embassy_stm32::exti::{self, ExtiInput};
 use embassy_stm32::gpio::{Level, Output, OutputType, Pull, Speed};
 use embassy_stm32::i2c::{self, I2c};
@@ -36,7 +37,7 @@ use embassy_stm32::time::{khz, Hertz};
 use embassy_stm32::timer::simple_pwm::{PwmPin, SimplePwm};
 use embassy_stm32::usart::{self, RingBufferedUartRx, Uart, UartTx};
 use embassy_stm32::wdg::IndependentWatchdog;
-use embassy_stm32::{bind_interrupts, dma, interrupt, peripherals, Config};
+use embassy_stm32::{bind_interrupts, dma, interrupt, peripherals, Config, Peri};
 use embassy_sync::blocking_mutex::raw::{CriticalSectionRawMutex, NoopRawMutex};
 use embassy_sync::blocking_mutex::Mutex as BlockingMutex;
 use embassy_sync::channel::Channel;
@@ -50,10 +51,11 @@ use fires_pen_core::drivers::{l3g4200d, lis3lv02dl, mag3110};
 use fires_pen_core::drivers::{l3g4200d::L3g4200d, lis3lv02dl::Lis3lv02dl, mag3110::Mag3110};
 use fires_pen_core::feedback::{self, FeedbackQueue};
 use fires_pen_core::iwrap::{self, LinkChange, ModemPort, RxRouter};
+use fires_pen_core::power::{battery_mv, BatteryMonitor};
 use fires_pen_core::sampler::{sample_loop, FrameSink, Framer, PenImu, TICK};
 use fires_pen_core::status::{StatusInputs, StatusReporter};
 use fires_pen_core::status_led::{color_at, Color};
-use fires_protocol::{Command, Health, StatusReason, FRAME_LEN};
+use fires_protocol::{Command, Health, StateFlags, StatusReason, FRAME_LEN};
 use panic_probe as _;
 use static_cell::StaticCell;
 
@@ -69,6 +71,7 @@ bind_interrupts!(struct Irqs {
     EXTI2 => exti::InterruptHandler<interrupt::typelevel::EXTI2>;
     EXTI3 => exti::InterruptHandler<interrupt::typelevel::EXTI3>;
     EXTI4 => exti::InterruptHandler<interrupt::typelevel::EXTI4>;
+    ADC1_2 => adc::InterruptHandler<peripherals::ADC1>;
 });
 
 type Cs = CriticalSectionRawMutex;
@@ -109,6 +112,7 @@ struct Shared {
     status: StatusReporter,
     inputs: StatusInputs,
     streaming: bool,
+    low_battery: bool,
 }
 
 /// The frame queue as the core's sink: a frame is queued whole or refused.
@@ -190,6 +194,7 @@ async fn main(spawner: Spawner) {
                 ..Default::default()
             },
             streaming: false,
+            low_battery: false,
         }))
     });
 
@@ -234,6 +239,11 @@ async fn main(spawner: Spawner) {
     );
 
     let wdg = IndependentWatchdog::new(p.IWDG, 1_000_000);
+    // Battery: VBAT / 2 on PB0 (ADC12_IN8), ratioed against VREFINT.
+    let battery = BatteryAdc {
+        adc: Adc::new(p.ADC1),
+        pin: p.PB0,
+    };
 
     FEEDBACK.lock(|q| q.borrow_mut().push_pattern(feedback::BOOT));
     spawner.spawn(unwrap_or_halt(watchdog_task(wdg)));
@@ -247,7 +257,7 @@ async fn main(spawner: Spawner) {
         _dtr: wt12_dtr,
     })));
     spawner.spawn(unwrap_or_halt(control_task(
-        boot, health, led, ir_leds, power_hold,
+        boot, health, led, ir_leds, power_hold, battery,
     )));
 }
 
@@ -465,6 +475,21 @@ async fn radio_task(mut radio: Radio) {
     join(tx_loop, rx_loop).await;
 }
 
+/// The battery divider's ADC input.
+struct BatteryAdc {
+    adc: Adc<'static, peripherals::ADC1>,
+    pin: Peri<'static, peripherals::PB0>,
+}
+
+impl BatteryAdc {
+    async fn read_mv(&mut self) -> u16 {
+        let mut vref = self.adc.enable_vref();
+        let raw_ref = self.adc.read(&mut vref, SampleTime::CYCLES239_5).await;
+        let raw_bat = self.adc.read(&mut self.pin, SampleTime::CYCLES239_5).await;
+        battery_mv(raw_bat, raw_ref)
+    }
+}
+
 #[embassy_executor::task]
 async fn control_task(
     boot: Instant,
@@ -472,8 +497,10 @@ async fn control_task(
     mut led: [Output<'static>; 3],
     mut ir_leds: Output<'static>,
     mut power_hold: Output<'static>,
+    mut battery_adc: BatteryAdc,
 ) {
     let mut ctl = Controller::new(boot);
+    let mut battery = BatteryMonitor::new();
     let sensors_ok = health.has(Health::ACCEL_OK | Health::GYRO_OK | Health::MAG_OK);
     let mut boot_status_sent = false;
     loop {
@@ -501,7 +528,18 @@ async fn control_task(
                 .is_some_and(|s| s.status.periodic_due(now))
         });
         if periodic {
+            battery.update(battery_adc.read_mv().await);
+            SHARED.lock(|s| {
+                if let Some(s) = s.borrow_mut().as_mut() {
+                    s.inputs.battery_mv = battery.mv();
+                    s.low_battery = battery.low();
+                }
+            });
             send_status(StatusReason::Periodic, &ctl, connected);
+            if battery.critical() {
+                let fx = ctl.on_battery_critical(Instant::now());
+                handle_effects(fx, &mut power_hold).await;
+            }
         }
         // Auto-off
         let fx = ctl.poll(now);
@@ -573,6 +611,9 @@ fn send_status(reason: StatusReason, ctl: &Controller, connected: bool) {
         let mut s = s.borrow_mut();
         let Some(s) = s.as_mut() else { return };
         s.inputs.flags = ctl.flags();
+        if s.low_battery {
+            s.inputs.flags.0 |= StateFlags::LOW_BATTERY;
+        }
         if connected {
             let inputs = s.inputs;
             let Shared { framer, status, .. } = s;

@@ -12,6 +12,7 @@
 //! | button change                  | a status packet now ([`StatusReason::ButtonChange`])                 |
 //! | power button held 5 s          | turn off (any state)                                                 |
 //! | 2 min in IDLE without activity | turn off                                                             |
+//! | battery critical               | turn off (any state)                                                 |
 //!
 //! Commands, button changes and link events all count as activity for the auto-off timer. Commands only arrive
 //! while a host is connected (the UART carries SPP data only then); `=` is nevertheless refused while not
@@ -228,6 +229,11 @@ impl Controller {
         fx
     }
 
+    /// The battery monitor says the cell is nearly empty: turn off (any state).
+    pub fn on_battery_critical(&mut self, now: Instant) -> Effects {
+        self.off(PowerOffReason::LowBattery, now)
+    }
+
     /// Time passes: the IDLE auto-off.
     pub fn poll(&mut self, now: Instant) -> Effects {
         let idle = self.mode == Mode::Idle;
@@ -381,6 +387,16 @@ mod tests {
         );
         // only once
         assert_eq!(c.poll(t(2_000_000)).power_off, None);
+    }
+
+    #[test]
+    fn critical_battery_turns_off_even_while_streaming() {
+        let (mut c, mut fb) = ready();
+        c.on_link(LinkChange::Connected, &mut fb, t(2000));
+        c.on_command(Command::Start, &mut fb, t(2100));
+        let fx = c.on_battery_critical(t(3000));
+        assert_eq!(fx.power_off, Some(PowerOffReason::LowBattery));
+        assert!(!c.streaming() && !c.ir_leds());
     }
 
     #[test]
