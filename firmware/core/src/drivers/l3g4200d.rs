@@ -217,6 +217,33 @@ mod tests {
     }
 
     #[test]
+    fn works_over_spi_too() {
+        use crate::drivers::bus::SpiRegisters;
+        use embedded_hal_mock::eh1::spi::{Mock as SpiMock, Transaction as SpiT};
+        let mut spi = SpiMock::new(&[
+            SpiT::transaction_start(),
+            SpiT::write(0x8F), // read WHO_AM_I
+            SpiT::read(0xD3),
+            SpiT::transaction_end(),
+            SpiT::transaction_start(),
+            SpiT::write_vec(vec![0x23, 0xB0]),
+            SpiT::transaction_end(),
+            SpiT::transaction_start(),
+            SpiT::write_vec(vec![0x20, 0x1F]),
+            SpiT::transaction_end(),
+            SpiT::transaction_start(),
+            SpiT::write(0xE8), // read | auto-increment | OUT_X_L
+            SpiT::read_vec(sample(100, -100, 0)),
+            SpiT::transaction_end(),
+        ]);
+        let mut dev = L3g4200d::new(SpiRegisters::new(spi.clone()));
+        block_on(dev.identify()).unwrap();
+        block_on(dev.configure()).unwrap();
+        assert_eq!(block_on(dev.read()).unwrap(), [100, -100, 0]);
+        spi.done();
+    }
+
+    #[test]
     fn scale_matches_board_description() {
         let f = fires_protocol::ScaleFactors::FIRES_PEN.gyro_radps_per_count;
         assert!((DPS_PER_COUNT.to_radians() - f).abs() < 1e-12);
