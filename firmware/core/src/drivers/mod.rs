@@ -1,0 +1,83 @@
+//! Register-level drivers for the pen's three inertial sensors, generic over an `embedded-hal-async` I2C bus or
+//! SPI device through [`bus::RegisterBus`].
+//!
+//! Every driver offers the same four steps: `identify` (WHO_AM_I), `configure` (the ranges and rates the FIRES
+//! board description promises, see [`crate::board`]), `read` (all three axes in one burst, raw counts) and a
+//! self-test (the MAG3110 has none: it gets a plausibility check instead). Register addresses and values are taken
+//! from the datasheets named in each module; the tests in each module check them at register level against
+//! `embedded-hal-mock`.
+
+pub mod bus;
+pub mod l3g4200d;
+pub mod lis3lv02dl;
+pub mod mag3110;
+
+/// Raw counts of one 3-axis reading: x, y, z.
+pub type Axes = [i16; 3];
+
+/// What can go wrong talking to a sensor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SensorError<E> {
+    /// The bus transfer failed.
+    Bus(E),
+    /// WHO_AM_I returned something else than the part's identity.
+    WrongId {
+        /// The value the datasheet gives.
+        expected: u8,
+        /// The value read.
+        found: u8,
+    },
+    /// The self-test (or plausibility check) response was outside its window.
+    SelfTestFailed {
+        /// The per-axis response (counts) that was judged.
+        response: Axes,
+    },
+    /// The part never reported fresh data.
+    NotReady,
+}
+
+impl<E> From<E> for SensorError<E> {
+    fn from(e: E) -> Self {
+        SensorError::Bus(e)
+    }
+}
+
+/// Little-endian x, y, z from six bytes (ST parts with BLE = 0).
+pub(crate) fn axes_le(b: &[u8; 6]) -> Axes {
+    [
+        i16::from_le_bytes([b[0], b[1]]),
+        i16::from_le_bytes([b[2], b[3]]),
+        i16::from_le_bytes([b[4], b[5]]),
+    ]
+}
+
+/// Big-endian x, y, z from six bytes (MAG3110: MSB register first).
+pub(crate) fn axes_be(b: &[u8; 6]) -> Axes {
+    [
+        i16::from_be_bytes([b[0], b[1]]),
+        i16::from_be_bytes([b[2], b[3]]),
+        i16::from_be_bytes([b[4], b[5]]),
+    ]
+}
+
+/// Per-axis difference `a - b`, saturating.
+pub(crate) fn axes_sub(a: Axes, b: Axes) -> Axes {
+    [
+        a[0].saturating_sub(b[0]),
+        a[1].saturating_sub(b[1]),
+        a[2].saturating_sub(b[2]),
+    ]
+}
+
+/// Per-axis mean of a few readings (the self-tests average to beat the noise).
+pub(crate) fn axes_mean(samples: &[Axes]) -> Axes {
+    let mut sum = [0i32; 3];
+    for s in samples {
+        for (acc, v) in sum.iter_mut().zip(s) {
+            *acc += i32::from(*v);
+        }
+    }
+    let n = samples.len().max(1) as i32;
+    sum.map(|v| (v / n) as i16)
+}
