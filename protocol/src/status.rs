@@ -6,13 +6,13 @@
 //! |---------|-------------------------------------------------------------------------------|
 //! | 0, 1    | sync `0x20 0x0B`                                                              |
 //! | 2       | status sequence number, u8, +1 per status packet, wraps                       |
-//! | 3       | counter of the latest sensor packet sampled (ties `device_time_us` to it)     |
+//! | 3       | counter of the latest sensor packet sent (255 before the first; ties `device_time_us` to it) |
 //! | 4..=7   | device time of that sample, microseconds, u32 LE (wraps after ~71.6 min)      |
 //! | 8       | buttons: bit i = button i+1 pressed (bits 4..=7 zero)                         |
 //! | 9       | state flags ([`StateFlags`])                                                  |
 //! | 10      | sensor health ([`Health`])                                                    |
 //! | 11      | why this packet was sent ([`StatusReason`])                                   |
-//! | 12, 13  | battery voltage, millivolts, u16 LE                                           |
+//! | 12, 13  | battery voltage, millivolts, u16 LE (0 = not measured)                        |
 //! | 14..=17 | sensor packets dropped on the pen since power-on (backpressure), u32 LE       |
 //! | 18, 19  | firmware version major, minor                                                 |
 //! | 20      | protocol version ([`crate::PROTOCOL_VERSION`])                                |
@@ -148,7 +148,7 @@ impl StatusReason {
 pub struct StatusPacket {
     /// Status sequence number, +1 per status packet, modulo 256.
     pub sequence: u8,
-    /// Counter of the latest sensor packet sampled when this status was built.
+    /// Counter of the latest sensor packet sent before this status (255 before the first one).
     pub sensor_counter: u8,
     /// Device time of that sample in microseconds (wrapping u32).
     pub device_time_us: u32,
@@ -160,7 +160,7 @@ pub struct StatusPacket {
     pub health: Health,
     /// Why the packet was sent.
     pub reason: StatusReason,
-    /// Battery voltage in millivolts.
+    /// Battery voltage in millivolts (0 = not measured).
     pub battery_mv: u16,
     /// Sensor packets dropped on the pen since power-on.
     pub dropped_packets: u32,
