@@ -33,6 +33,18 @@ fn dirichlet_solve_reproduces_a_harmonic_function() {
         exact(p.x, p.y)[c]
     });
     let b = Mat::zeros(m.n_vertices(), 2);
+    // A scaled matrix has the same pattern and the same harmonic solution: numeric refactorisation only.
+    let mut solver = solver;
+    let scaled = sparse_from_triplets(
+        k.nrows(),
+        k.ncols(),
+        &sparse_triplets(k.as_ref())
+            .into_iter()
+            .map(|(i, j, v)| (i, j, 2.5 * v))
+            .collect::<Vec<_>>(),
+    )
+    .unwrap();
+    solver.refactorize(scaled.as_ref()).unwrap();
     let x = solver.solve(b.as_ref(), known.as_ref()).unwrap();
     for (i, p) in m.positions().iter().enumerate() {
         let e = exact(p.x, p.y);
