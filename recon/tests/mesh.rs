@@ -99,7 +99,7 @@ fn edge_splits_flips_face_splits_keep_invariants_and_chi() {
                 .map(|v| m.position(v))
                 .fold(Vec3::ZERO, |s, p| s + p)
                 / 3.0;
-            m.split_face(f, c);
+            m.split_face(f, c).unwrap();
             m.validate().unwrap();
             assert_eq!(m.euler_characteristic(), chi);
         }
@@ -231,7 +231,7 @@ fn random_sequences_of_euler_operations_stay_valid() {
                             .map(|v| m.position(v))
                             .fold(Vec3::ZERO, |s, p| s + p)
                             / 3.0;
-                        m.split_face(f, c);
+                        m.split_face(f, c).unwrap();
                     }
                 }
             }

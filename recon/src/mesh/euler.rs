@@ -95,7 +95,10 @@ impl SurfaceMesh {
     }
 
     /// Splits face `f` (any polygon) at point `p`, joining a new vertex to every corner.
-    pub fn split_face(&mut self, f: Face, p: Vec3) -> Vertex {
+    pub fn split_face(&mut self, f: Face, p: Vec3) -> Result<Vertex, MeshError> {
+        if self.is_deleted_face(f) {
+            return Err(MeshError::FaceOperationRejected(f));
+        }
         let v = self.add_vertex(p);
         let hend = self.face_halfedge(f);
         let mut h = self.next_halfedge(hend);
@@ -119,7 +122,7 @@ impl SurfaceMesh {
         self.set_next(first, hold);
         self.set_face(hold, Some(f));
         self.set_vertex_halfedge(v, Some(hold));
-        v
+        Ok(v)
     }
 
     /// True if edge `e` is interior, between two triangles, and flipping it does not
