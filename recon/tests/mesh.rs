@@ -246,3 +246,20 @@ fn random_sequences_of_euler_operations_stay_valid() {
         }
     }
 }
+
+#[test]
+fn large_polygons_are_checked_in_n_log_n() {
+    // A 60000-gon (a hostile OFF face) builds quickly; one repeated corner is rejected.
+    let n = 60_000;
+    let points: Vec<Vec3> = (0..n)
+        .map(|i| Vec3::new((i as f64).cos(), (i as f64).sin(), 0.0))
+        .collect();
+    let mut face: Vec<usize> = (0..n).collect();
+    let m = SurfaceMesh::from_faces(&points, &[face.clone()]).unwrap();
+    m.validate().unwrap();
+    face[n - 1] = 17;
+    assert!(matches!(
+        SurfaceMesh::from_faces(&points, &[face]),
+        Err(MeshError::DegenerateFace { face: 0 })
+    ));
+}
