@@ -1,6 +1,9 @@
+#!/usr/bin/env python3
+"""Interleaved faer vs CHOLMOD timing: compare.py MATRIX.mtx ROUNDS RUNS (paths: see B and C)."""
 import json, subprocess, statistics, sys, os
-B="/work/wt/recon/target/release/examples/bench"
-C="/work/wt/recon/recon/tools/cholmod-bench/cholmod_bench"
+HERE = os.path.dirname(os.path.abspath(__file__))
+B = os.environ.get("FAER_BENCH", os.path.join(HERE, "../../../target/release/examples/bench"))
+C = os.path.join(HERE, "cholmod_bench")
 env=dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", LD_LIBRARY_PATH="/usr/lib/x86_64-linux-gnu/openblas-serial")
 def run(cmd):
     return json.loads(subprocess.run(cmd, capture_output=True, text=True, env=env).stdout.strip().splitlines()[-1])
