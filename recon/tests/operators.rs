@@ -274,3 +274,26 @@ fn vertex_gradient_is_exact_for_linear_functions_and_kills_constants() {
         assert!(gc[3 * v..3 * v + 3].iter().all(|x| x.abs() < 1e-9));
     }
 }
+
+#[test]
+fn heat_geodesic_on_a_plane_with_boundary_is_close_to_euclidean() {
+    let m = plane_grid(40, 40, 1.0, 1.0, false);
+    let centre = fires_recon::mesh::Vertex::new(20 * 41 + 20);
+    let geo = HeatGeodesic::new(&m).unwrap();
+    let d = geo.distance(&[centre]).unwrap();
+    let c = m.position(centre);
+    for v in m.vertices() {
+        let exact = m.position(v).distance(c);
+        assert!(
+            (d[v.idx()] - exact).abs() < 0.03,
+            "{} vs {exact}",
+            d[v.idx()]
+        );
+    }
+    // The precomputed factorisations serve other sources too.
+    let corner = geo.distance(&[fires_recon::mesh::Vertex::new(0)]).unwrap();
+    assert!((corner[40] - 1.0).abs() < 0.05);
+    assert!(geo
+        .distance(&[fires_recon::mesh::Vertex::new(99_999)])
+        .is_err());
+}
