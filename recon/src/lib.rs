@@ -10,7 +10,7 @@
 //! * [`solve`]: sparse Cholesky with symbolic reuse, fixed-value (Dirichlet) elimination and
 //!   stacked least squares (libigl's precompute/solve split);
 //! * [`subdivide`]: Loop subdivision;
-//! * [`bench`]: solver timing used by `fires bench solve|laplacian`.
+//! * [`mod@bench`]: solver timing used by `fires bench solve|laplacian`.
 
 pub mod bench;
 pub mod generate;

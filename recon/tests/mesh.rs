@@ -99,7 +99,7 @@ fn edge_splits_flips_face_splits_keep_invariants_and_chi() {
                 .map(|v| m.position(v))
                 .fold(Vec3::ZERO, |s, p| s + p)
                 / 3.0;
-            m.split_face(f, c);
+            m.split_face(f, c).unwrap();
             m.validate().unwrap();
             assert_eq!(m.euler_characteristic(), chi);
         }
@@ -183,4 +183,83 @@ fn properties_follow_garbage_collection() {
     assert_eq!(ids.len(), m.n_vertices());
     assert!(!ids.contains(&removed));
     assert!(ids.windows(2).all(|w| w[0] < w[1]));
+}
+
+#[test]
+fn random_sequences_of_euler_operations_stay_valid() {
+    let mut state = 0x2545_F491_4F6C_DD1Du64;
+    let mut next = move |n: usize| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state % n.max(1) as u64) as usize
+    };
+    for mut m in [
+        torus(2.0, 0.7, 9, 7, false),
+        cylinder(1.0, 1.0, 8, 4, false),
+        icosphere(1, 1.0),
+    ] {
+        let chi = m.euler_characteristic();
+        for step in 0..400 {
+            match next(4) {
+                0 => {
+                    let e = fires_recon::mesh::Edge::new(next(m.edges_size()));
+                    if !m.is_deleted_edge(e) {
+                        let (a, b) = m.edge_vertices(e);
+                        m.split_edge(e, (m.position(a) + m.position(b)) * 0.5)
+                            .unwrap();
+                    }
+                }
+                1 => {
+                    let e = fires_recon::mesh::Edge::new(next(m.edges_size()));
+                    if !m.is_deleted_edge(e) && m.is_flip_ok(e) {
+                        m.flip(e).unwrap();
+                    }
+                }
+                2 => {
+                    let h = fires_recon::mesh::Halfedge::new(next(m.halfedges_size()));
+                    if !m.is_deleted_edge(h.edge()) {
+                        let ok = m.is_collapse_ok(h);
+                        assert_eq!(m.collapse(h).is_ok(), ok);
+                    }
+                }
+                _ => {
+                    let f = fires_recon::mesh::Face::new(next(m.faces_size()));
+                    if !m.is_deleted_face(f) {
+                        let c = m
+                            .face_vertices(f)
+                            .map(|v| m.position(v))
+                            .fold(Vec3::ZERO, |s, p| s + p)
+                            / 3.0;
+                        m.split_face(f, c).unwrap();
+                    }
+                }
+            }
+            if let Err(e) = m.validate() {
+                panic!("step {step}: {e}");
+            }
+            assert_eq!(m.euler_characteristic(), chi, "step {step}");
+            if step % 100 == 99 {
+                m.garbage_collection();
+                m.validate().unwrap();
+            }
+        }
+    }
+}
+
+#[test]
+fn large_polygons_are_checked_in_n_log_n() {
+    // A 60000-gon (a hostile OFF face) builds quickly; one repeated corner is rejected.
+    let n = 60_000;
+    let points: Vec<Vec3> = (0..n)
+        .map(|i| Vec3::new((i as f64).cos(), (i as f64).sin(), 0.0))
+        .collect();
+    let mut face: Vec<usize> = (0..n).collect();
+    let m = SurfaceMesh::from_faces(&points, &[face.clone()]).unwrap();
+    m.validate().unwrap();
+    face[n - 1] = 17;
+    assert!(matches!(
+        SurfaceMesh::from_faces(&points, &[face]),
+        Err(MeshError::DegenerateFace { face: 0 })
+    ));
 }

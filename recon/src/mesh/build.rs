@@ -55,9 +55,13 @@ impl SurfaceMesh {
                 });
             }
         }
-        let distinct = face
-            .iter()
-            .all(|a| face.iter().filter(|&b| b == a).count() == 1);
+        let distinct = if face.len() <= 8 {
+            (1..face.len()).all(|k| !face[..k].contains(&face[k]))
+        } else {
+            let mut sorted = face.to_vec();
+            sorted.sort_unstable();
+            sorted.windows(2).all(|w| w[0] != w[1])
+        };
         if face.len() < 3 || !distinct {
             return Err(MeshError::DegenerateFace { face: fi });
         }

@@ -1,6 +1,6 @@
 //! Errors of mesh construction and editing.
 
-use super::handles::{Edge, Halfedge, Vertex};
+use super::handles::{Edge, Face, Halfedge, Vertex};
 
 /// What went wrong building or editing a [`super::SurfaceMesh`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -41,6 +41,9 @@ pub enum MeshError {
     /// The operation is not allowed on this edge (see the `is_*_ok` predicates).
     #[error("operation not allowed on edge {0}")]
     EdgeOperationRejected(Edge),
+    /// The operation is not allowed on this face (e.g. it was deleted).
+    #[error("operation not allowed on face {0}")]
+    FaceOperationRejected(Face),
     /// The operation is not allowed on this halfedge.
     #[error("operation not allowed on halfedge {0}")]
     HalfedgeOperationRejected(Halfedge),

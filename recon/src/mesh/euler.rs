@@ -11,6 +11,9 @@ impl SurfaceMesh {
     /// Splits edge `e` of a triangle mesh at point `p`: adds a vertex and connects it to
     /// the opposite vertex of each adjacent triangle. Returns the new vertex.
     pub fn split_edge(&mut self, e: Edge, p: Vec3) -> Result<Vertex, MeshError> {
+        if self.is_deleted_edge(e) {
+            return Err(MeshError::EdgeOperationRejected(e));
+        }
         let tri = |h: Halfedge| self.face(h).is_none_or(|f| self.face_valence(f) == 3);
         if !tri(e.halfedge(0)) || !tri(e.halfedge(1)) {
             return Err(MeshError::EdgeOperationRejected(e));
@@ -92,7 +95,10 @@ impl SurfaceMesh {
     }
 
     /// Splits face `f` (any polygon) at point `p`, joining a new vertex to every corner.
-    pub fn split_face(&mut self, f: Face, p: Vec3) -> Vertex {
+    pub fn split_face(&mut self, f: Face, p: Vec3) -> Result<Vertex, MeshError> {
+        if self.is_deleted_face(f) {
+            return Err(MeshError::FaceOperationRejected(f));
+        }
         let v = self.add_vertex(p);
         let hend = self.face_halfedge(f);
         let mut h = self.next_halfedge(hend);
@@ -116,13 +122,13 @@ impl SurfaceMesh {
         self.set_next(first, hold);
         self.set_face(hold, Some(f));
         self.set_vertex_halfedge(v, Some(hold));
-        v
+        Ok(v)
     }
 
     /// True if edge `e` is interior, between two triangles, and flipping it does not
     /// create an edge that already exists.
     pub fn is_flip_ok(&self, e: Edge) -> bool {
-        if self.is_boundary_edge(e) {
+        if self.is_deleted_edge(e) || self.is_boundary_edge(e) {
             return false;
         }
         let (h0, h1) = (e.halfedge(0), e.halfedge(1));
@@ -169,6 +175,9 @@ impl SurfaceMesh {
     /// mesh a manifold of the same topology: the link condition on the two one-rings,
     /// plus the boundary cases of pmp-library's `is_collapse_ok`. Triangle meshes only.
     pub fn is_collapse_ok(&self, h: Halfedge) -> bool {
+        if self.is_deleted_edge(h.edge()) {
+            return false;
+        }
         let o = h.opposite();
         let (v0, v1) = (self.to_vertex(o), self.to_vertex(h));
         let Some(vl) = self.collapse_side_vertex(h) else {

@@ -13,6 +13,8 @@ pub(crate) struct HalfedgeConn {
 }
 
 /// A halfedge mesh of polygons with per-element properties.
+///
+/// `clone()` copies connectivity and positions but not the (type-erased) properties.
 #[derive(Debug, Clone, Default)]
 pub struct SurfaceMesh {
     pub(crate) points: Vec<Vec3>,

@@ -71,7 +71,7 @@ pub fn divergence_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorErr
 }
 
 /// The thesis's per-vertex gradient `W = D_W·W^s` (seed-002-part1 §1.2, eqs. 1.5, 1.9–1.10,
-/// with the **[FIX]** diagonal sign): the area-weighted average of the face gradients
+/// with the corrected (**FIX**) diagonal sign): the area-weighted average of the face gradients
 /// around each vertex, as a `3V × V` matrix (row `3i + c`). Its transpose-free use
 /// `div V ≈ Σ_c W_c V_c` (§1.3) and the 2-ring Laplacian `W·W` follow from it.
 pub fn vertex_gradient_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorError> {

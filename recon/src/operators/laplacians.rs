@@ -4,7 +4,7 @@
 //! | kind | w_ij | D_ii |
 //! |---|---|---|
 //! | `Cotan(mass)` | cot α + cot β | 1/(2A_i) |
-//! | `CotanNormalized` | cot α + cot β | 1/Σ_j w_ij (**[FIX]** of §1.4) |
+//! | `CotanNormalized` | cot α + cot β | 1/Σ_j w_ij (corrected, FIX of §1.4) |
 //! | `Umbrella` | 1 | 1/d_i |
 //! | `ScaledUmbrella` | 1/‖X_i − X_j‖ | 2/Σ_j ‖X_i − X_j‖ |
 //! | `MeanValue` | (tan(γ/2) + tan(η/2))/‖X_i − X_j‖ | 1 (not symmetric) |

@@ -17,6 +17,7 @@ const NONE: usize = usize::MAX;
 #[derive(Debug, Clone)]
 pub struct FixedSolver {
     n: usize,
+    slot: Vec<usize>,
     known: Vec<usize>,
     unknown: Vec<usize>,
     a_uk: SparseMatrix,
@@ -40,11 +41,25 @@ impl FixedSolver {
         let chol = CholeskySolver::new(a_uu.as_ref(), options)?;
         Ok(Self {
             n,
+            slot,
             known,
             unknown,
             a_uk,
             chol,
         })
+    }
+
+    /// New values for a matrix with the same pattern and known set (e.g. new weights or
+    /// a new time step): only the numeric factorisation is redone, the symbolic analysis
+    /// is reused. Fails with [`SolveError::PatternChanged`] if the pattern differs.
+    pub fn refactorize(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<(), SolveError> {
+        if a.nrows() != self.n || a.ncols() != self.n {
+            return Err(SolveError::Dimension("matrix size changed".into()));
+        }
+        let (a_uu, a_uk) = split_blocks(a, &self.slot, self.unknown.len(), self.known.len())?;
+        self.chol.factorize(a_uu.as_ref())?;
+        self.a_uk = a_uk;
+        Ok(())
     }
 
     /// Indices of the free unknowns, in the order of the reduced system.
