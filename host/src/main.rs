@@ -25,12 +25,15 @@ struct Cli {
 enum Command {
     /// Decode raw pen link bytes into one JSON line per packet, then a summary line.
     Decode(cli::decode::DecodeArgs),
+    /// Benchmark the sparse solvers of the geometry core (JSON line of median timings).
+    Bench(cli::bench::BenchArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Decode(args) => cli::decode::run(args),
+        Command::Bench(args) => cli::bench::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

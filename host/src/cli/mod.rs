@@ -1,3 +1,4 @@
 //! The `fires` subcommands, one module each.
 
+pub mod bench;
 pub mod decode;

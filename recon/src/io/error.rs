@@ -6,8 +6,8 @@ use crate::mesh::MeshError;
 /// binary formats byte offsets from the start of the stream.
 #[derive(Debug, thiserror::Error)]
 pub enum IoError {
-    /// Underlying I/O failure.
-    #[error("I/O error: {0}")]
+    /// Underlying I/O failure (shown as the OS's message; callers add the file name).
+    #[error(transparent)]
     Io(#[from] std::io::Error),
     /// Malformed text.
     #[error("line {line}: {message}")]

@@ -1,0 +1,52 @@
+//! `fires bench`: the solver benchmarks of the geometry core (issue figures), one JSON line each.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use fires_recon::bench::{bench_laplacian, bench_solve_matrix_market};
+
+/// Arguments of `fires bench`.
+#[derive(Debug, clap::Args)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    what: BenchKind,
+}
+
+#[derive(Debug, clap::Subcommand)]
+enum BenchKind {
+    /// Time analysis, factorisation and a 3-column solve of an SPD Matrix Market file (single-threaded).
+    Solve {
+        /// Coordinate, real, symmetric matrix (either triangle stored).
+        matrix: PathBuf,
+        /// Runs the medians are taken over.
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+    },
+    /// Build a mesh's cotangent system with 5% of the vertices fixed and time the same steps.
+    Laplacian {
+        /// Mesh file (OBJ, OFF, PLY, STL).
+        mesh: PathBuf,
+        /// Loop subdivision steps applied first (each multiplies the vertex count by about 4).
+        #[arg(long, default_value_t = 0)]
+        subdivide: u32,
+        /// Runs the medians are taken over.
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+    },
+}
+
+/// Runs the benchmark and prints its JSON line.
+pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    let timings = match &args.what {
+        BenchKind::Solve { matrix, runs } => bench_solve_matrix_market(matrix, *runs)
+            .with_context(|| format!("benchmark of {}", matrix.display()))?,
+        BenchKind::Laplacian {
+            mesh,
+            subdivide,
+            runs,
+        } => bench_laplacian(mesh, *subdivide, *runs)
+            .with_context(|| format!("benchmark of {}", mesh.display()))?,
+    };
+    println!("{}", timings.to_json_line());
+    Ok(())
+}
