@@ -1,0 +1,332 @@
+//! Cameras: pinhole projection with OpenCV distortion (through [`fires_record::CameraModel`], the same code the
+//! host uses), per-frame exposure times with jitter, LED visibility (field of view, emission cone, occlusion by
+//! the object and by the hand), spurious spots (LED reflections on the object, sunlight), and the device output:
+//! a blob list (Wii-like cameras) or an 8-bit image with blurred spots, background and sensor noise.
+//!
+//! Rendering cost is kept low: the background is copied from a pre-generated noise table at a random offset
+//! (one `memcpy` per frame), and each spot is evaluated only in a window of about 3.5 sigma around it.
+
+use crate::motion::{Pose, Scene};
+use crate::objects::V3;
+use crate::pen::Pen;
+use crate::rng::SimRng;
+use fires_record::{Blob, CalibratedCamera, GrayImage, LedTruth, Visibility};
+
+/// The simulated hand: a sphere fixed in the pen frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HandModel {
+    /// Centre in the pen frame, metres.
+    pub centre_pen: V3,
+    /// Radius, metres.
+    pub radius: f64,
+}
+
+/// Image formation parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImageModel {
+    /// Mean background level, DN.
+    pub background: f64,
+    /// Sensor noise standard deviation, DN.
+    pub noise_sigma: f64,
+    /// Peak spot level (before saturation) of an LED seen on its axis at 1 m, DN.
+    pub gain: f64,
+    /// LED emitter diameter, metres (sets the spot size with distance).
+    pub led_diameter_m: f64,
+    /// Optical blur sigma, pixels.
+    pub blur_px: f64,
+}
+
+/// What the camera device delivers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CameraOutput {
+    /// A list of at most `max_blobs` blobs (the brightest), centroids with Gaussian noise.
+    Blobs {
+        /// Most blobs per frame (4 for a Wii remote).
+        max_blobs: usize,
+        /// Centroid noise, pixels.
+        centroid_noise_px: f64,
+        /// Spot size model (for blob areas).
+        image: ImageModel,
+    },
+    /// 8-bit images.
+    Images(ImageModel),
+}
+
+impl CameraOutput {
+    /// The image formation model.
+    pub fn image_model(&self) -> &ImageModel {
+        match self {
+            CameraOutput::Blobs { image, .. } | CameraOutput::Images(image) => image,
+        }
+    }
+}
+
+/// One simulated camera.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraConfig {
+    /// Calibration (the true one; it is also what the recording stores).
+    pub cal: CalibratedCamera,
+    /// Nominal frame rate, hertz.
+    pub rate_hz: f64,
+    /// Time of the first exposure, seconds of session time (the offset between the unsynchronised cameras).
+    pub offset_s: f64,
+    /// Jitter (standard deviation) of the true exposure times around the nominal grid, seconds.
+    pub jitter_s: f64,
+    /// Noise of the reported timestamp around the true exposure time, seconds.
+    pub timestamp_noise_s: f64,
+    /// Device output.
+    pub output: CameraOutput,
+    /// Brightness (relative, 1 = on-axis at 1 m) below which an LED is not seen.
+    pub min_brightness: f64,
+    /// Probability per visible LED per frame of a reflection on the object.
+    pub reflection_rate: f64,
+    /// Mean number of sunlight spots per frame.
+    pub sunlight_rate: f64,
+}
+
+/// A bright spot to render or report.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spot {
+    /// Pixel position.
+    pub px: [f64; 2],
+    /// Peak level before saturation, DN.
+    pub peak: f64,
+    /// Gaussian sigma, pixels.
+    pub sigma: f64,
+}
+
+/// What one exposure sees.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Observation {
+    /// Per LED.
+    pub leds: Vec<LedTruth>,
+    /// Spots of visible LEDs.
+    pub led_spots: Vec<Spot>,
+    /// Spurious spots.
+    pub spurious: Vec<Spot>,
+}
+
+impl CameraConfig {
+    /// Spot sigma (pixels) of an LED at distance `d` metres.
+    fn spot_sigma(&self, d: f64) -> f64 {
+        let m = self.output.image_model();
+        let f = self.cal.intrinsics.fx;
+        let r = f * m.led_diameter_m / (4.0 * d.max(1e-3));
+        (m.blur_px * m.blur_px + r * r).sqrt()
+    }
+
+    /// Computes LED visibility and spots for one exposure.
+    pub fn observe(
+        &self,
+        pose: &Pose,
+        pen: &Pen,
+        scene: Option<&Scene>,
+        hand: Option<&HandModel>,
+        rng: &mut SimRng,
+    ) -> Observation {
+        let centre = V3::from(self.cal.extrinsics.centre_world());
+        let leds = pen.leds_world(&pose.tip, &pose.q);
+        let hand_world = hand.map(|h| (pose.tip + pose.q * h.centre_pen, h.radius));
+        let gain = self.output.image_model().gain;
+        let mut out = Observation {
+            leds: Vec::with_capacity(leds.len()),
+            led_spots: Vec::new(),
+            spurious: Vec::new(),
+        };
+        for (i, led) in leds.iter().enumerate() {
+            let pixel = self.cal.project_world([led.x, led.y, led.z]);
+            let d = (centre - led).norm();
+            let brightness = pen.intensity_towards(led, &pose.q, &centre) / (d * d).max(1e-6);
+            let visibility = if pen.disabled.get(i).copied().unwrap_or(false) {
+                Visibility::Disabled
+            } else if pixel.is_none() {
+                Visibility::BehindCamera
+            } else if !pixel.is_some_and(|p| self.cal.intrinsics.contains(p)) {
+                Visibility::OutOfView
+            } else if brightness < self.min_brightness {
+                Visibility::TooDim
+            } else if scene.is_some_and(|s| s.shape.blocks_segment(led, &centre, 1e-4)) {
+                Visibility::OccludedByObject
+            } else if hand_world.is_some_and(|(c, r)| segment_hits_sphere(led, &centre, &c, r)) {
+                Visibility::OccludedByHand
+            } else {
+                Visibility::Visible
+            };
+            if let (Visibility::Visible, Some(px)) = (visibility, pixel) {
+                out.led_spots.push(Spot {
+                    px,
+                    peak: gain * brightness,
+                    sigma: self.spot_sigma(d),
+                });
+                if let Some(s) = scene {
+                    if rng.chance(self.reflection_rate) {
+                        if let Some(spot) = self.reflection(s, &pose.tip, led, gain * brightness) {
+                            out.spurious.push(spot);
+                        }
+                    }
+                }
+            }
+            out.leds.push(LedTruth {
+                pixel,
+                visibility,
+                brightness,
+            });
+        }
+        let n_sun = poisson(rng, self.sunlight_rate);
+        for _ in 0..n_sun {
+            let w = f64::from(self.cal.intrinsics.width);
+            let h = f64::from(self.cal.intrinsics.height);
+            out.spurious.push(Spot {
+                px: [rng.range(0.0, w - 1.0), rng.range(0.0, h - 1.0)],
+                peak: rng.range(0.3, 1.5) * 255.0,
+                sigma: rng.range(0.8, 3.0),
+            });
+        }
+        out
+    }
+
+    /// A specular reflection of `led` in the object's tangent plane near the tip, if it lands in the image.
+    fn reflection(&self, scene: &Scene, tip: &V3, led: &V3, peak: f64) -> Option<Spot> {
+        let dist = scene.shape.sdf(tip);
+        if dist.abs() > 0.05 {
+            return None;
+        }
+        let n = scene.shape.normal(tip);
+        let surface = tip - n * dist;
+        let mirror = led - n * (2.0 * (led - surface).dot(&n));
+        let px = self.cal.project_world([mirror.x, mirror.y, mirror.z])?;
+        if !self.cal.intrinsics.contains(px) {
+            return None;
+        }
+        let centre = V3::from(self.cal.extrinsics.centre_world());
+        Some(Spot {
+            px,
+            peak: 0.3 * peak,
+            sigma: self.spot_sigma((centre - mirror).norm()),
+        })
+    }
+
+    /// The device's blob list for an observation.
+    pub fn blobs(&self, obs: &Observation, rng: &mut SimRng) -> Vec<Blob> {
+        let (max_blobs, noise) = match self.output {
+            CameraOutput::Blobs {
+                max_blobs,
+                centroid_noise_px,
+                ..
+            } => (max_blobs, centroid_noise_px),
+            CameraOutput::Images(_) => (64, 0.2),
+        };
+        let threshold = 2.0 * self.output.image_model().noise_sigma.max(1.0)
+            + self.output.image_model().background;
+        let mut spots: Vec<&Spot> = obs
+            .led_spots
+            .iter()
+            .chain(&obs.spurious)
+            .filter(|s| s.peak > threshold)
+            .collect();
+        // The brightest first (stable: ties keep LED order), then report in x order like a sensor scan.
+        spots.sort_by(|a, b| b.peak.total_cmp(&a.peak));
+        spots.truncate(max_blobs);
+        let mut out: Vec<Blob> = spots
+            .into_iter()
+            .map(|s| Blob {
+                x: s.px[0] + rng.gauss(noise),
+                y: s.px[1] + rng.gauss(noise),
+                area: (std::f64::consts::PI * 4.0 * s.sigma * s.sigma).round().max(1.0),
+                intensity: s.peak.min(255.0).round(),
+            })
+            .collect();
+        out.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+        out
+    }
+}
+
+/// Whether the segment `a`-`b` passes through the sphere (`c`, `r`).
+pub fn segment_hits_sphere(a: &V3, b: &V3, c: &V3, r: f64) -> bool {
+    let ab = b - a;
+    let len2 = ab.norm_squared();
+    if len2 < 1e-24 {
+        return (a - c).norm() < r;
+    }
+    let t = ((c - a).dot(&ab) / len2).clamp(0.0, 1.0);
+    (a + ab * t - c).norm() < r
+}
+
+/// Poisson-distributed count (Knuth's method; fine for small means).
+pub fn poisson(rng: &mut SimRng, mean: f64) -> u32 {
+    if mean <= 0.0 {
+        return 0;
+    }
+    let l = (-mean).exp();
+    let mut k = 0;
+    let mut p = 1.0;
+    loop {
+        p *= rng.uniform();
+        if p <= l || k >= 1000 {
+            return k;
+        }
+        k += 1;
+    }
+}
+
+/// Pre-generated background noise for fast frame rendering.
+#[derive(Clone, Debug)]
+pub struct NoiseTable {
+    data: Vec<u8>,
+    frame_len: usize,
+}
+
+/// Number of distinct start offsets in the noise table.
+const NOISE_OFFSETS: usize = 1 << 20;
+
+impl NoiseTable {
+    /// A table for `width x height` frames with the model's background and noise.
+    pub fn new(width: u32, height: u32, m: &ImageModel, rng: &mut SimRng) -> Self {
+        let frame_len = width as usize * height as usize;
+        let data = (0..NOISE_OFFSETS + frame_len)
+            .map(|_| (m.background + rng.gauss(m.noise_sigma)).round().clamp(0.0, 255.0) as u8)
+            .collect();
+        NoiseTable { data, frame_len }
+    }
+
+    /// Renders a frame: noise background plus Gaussian spots (saturating at 255).
+    pub fn render(
+        &self,
+        width: u32,
+        height: u32,
+        spots: &[Spot],
+        rng: &mut SimRng,
+    ) -> GrayImage {
+        let off = rng.below(NOISE_OFFSETS as u64) as usize;
+        let mut img = GrayImage {
+            width,
+            height,
+            data: self.data[off..off + self.frame_len].to_vec(),
+        };
+        for s in spots {
+            draw_spot(&mut img, s);
+        }
+        img
+    }
+}
+
+/// Adds a Gaussian spot to an image within a 3.5-sigma window.
+pub fn draw_spot(img: &mut GrayImage, s: &Spot) {
+    let r = (3.5 * s.sigma).ceil() + 1.0;
+    let (w, h) = (i64::from(img.width), i64::from(img.height));
+    let x0 = ((s.px[0] - r).floor() as i64).max(0);
+    let x1 = ((s.px[0] + r).ceil() as i64).min(w - 1);
+    let y0 = ((s.px[1] - r).floor() as i64).max(0);
+    let y1 = ((s.px[1] + r).ceil() as i64).min(h - 1);
+    let k = -0.5 / (s.sigma * s.sigma);
+    for y in y0..=y1 {
+        let dy = y as f64 - s.px[1];
+        for x in x0..=x1 {
+            let dx = x as f64 - s.px[0];
+            let v = s.peak * ((dx * dx + dy * dy) * k).exp();
+            let idx = (y * w + x) as usize;
+            let cur = f64::from(img.data[idx]);
+            img.data[idx] = (cur + v).round().min(255.0) as u8;
+        }
+    }
+}
