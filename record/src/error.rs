@@ -32,7 +32,9 @@ pub enum RecordError {
         found: String,
     },
     /// The format version is not `MAJOR.MINOR` or has a major this reader does not know.
-    #[error("{path}: unsupported format version {found:?} (this reader reads major {supported_major})")]
+    #[error(
+        "{path}: unsupported format version {found:?} (this reader reads major {supported_major})"
+    )]
     UnsupportedVersion {
         /// The file.
         path: PathBuf,

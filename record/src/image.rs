@@ -67,7 +67,9 @@ impl GrayImage {
                 return Err(bad("header field is not a number"));
             }
             let text = std::str::from_utf8(&bytes[start..pos]).map_err(|_| bad("header"))?;
-            *field = text.parse().map_err(|_| bad("header field is not a number"))?;
+            *field = text
+                .parse()
+                .map_err(|_| bad("header field is not a number"))?;
         }
         if !bytes.get(pos).is_some_and(u8::is_ascii_whitespace) {
             return Err(bad("no whitespace after maxval"));
@@ -77,9 +79,7 @@ impl GrayImage {
         if maxval != 255 {
             return Err(bad("maxval must be 255 (8-bit)"));
         }
-        let n = w
-            .checked_mul(h)
-            .ok_or_else(|| bad("size overflows"))?;
+        let n = w.checked_mul(h).ok_or_else(|| bad("size overflows"))?;
         let data = &bytes[pos..];
         if data.len() as u64 != n {
             return Err(RecordError::BadImage {

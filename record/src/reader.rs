@@ -141,10 +141,8 @@ impl RecordingReader {
         let frames: Vec<CameraFrame> = read_jsonl(&path)?;
         for (i, f) in frames.iter().enumerate() {
             if let Some(name) = &f.image {
-                let plain = !name.is_empty()
-                    && !name.contains(['/', '\\'])
-                    && name != "."
-                    && name != "..";
+                let plain =
+                    !name.is_empty() && !name.contains(['/', '\\']) && name != "." && name != "..";
                 if !plain {
                     return Err(RecordError::BadImageName {
                         path,
@@ -191,12 +189,16 @@ impl RecordingReader {
     }
 
     fn truth_path(&self, name: &str) -> Option<PathBuf> {
-        self.meta.has_truth.then(|| self.dir.join("truth").join(name))
+        self.meta
+            .has_truth
+            .then(|| self.dir.join("truth").join(name))
     }
 
     /// Ground truth at every IMU sample (`None` without ground truth).
     pub fn imu_truth(&self) -> Result<Option<Vec<ImuTruth>>, RecordError> {
-        self.truth_path("imu.jsonl").map(|p| read_jsonl(&p)).transpose()
+        self.truth_path("imu.jsonl")
+            .map(|p| read_jsonl(&p))
+            .transpose()
     }
 
     /// Ground truth at every exposure of every camera.

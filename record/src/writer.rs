@@ -69,7 +69,12 @@ impl RecordingWriter {
         fs::create_dir_all(dir).map_err(|e| RecordError::io(dir, e))?;
         write_json_file(dir.join("meta.json"), meta)?;
         let link = Out::create(dir.join("link.bin"))?;
-        let max_id = meta.cameras.iter().map(|c| c.id as usize + 1).max().unwrap_or(0);
+        let max_id = meta
+            .cameras
+            .iter()
+            .map(|c| c.id as usize + 1)
+            .max()
+            .unwrap_or(0);
         let mut frames: Vec<Option<Out>> = (0..max_id).map(|_| None).collect();
         for cam in &meta.cameras {
             let cdir = dir.join(camera_dir_name(cam.id));

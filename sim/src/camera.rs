@@ -232,7 +232,9 @@ impl CameraConfig {
             .map(|s| Blob {
                 x: s.px[0] + rng.gauss(noise),
                 y: s.px[1] + rng.gauss(noise),
-                area: (std::f64::consts::PI * 4.0 * s.sigma * s.sigma).round().max(1.0),
+                area: (std::f64::consts::PI * 4.0 * s.sigma * s.sigma)
+                    .round()
+                    .max(1.0),
                 intensity: s.peak.min(255.0).round(),
             })
             .collect();
@@ -284,19 +286,17 @@ impl NoiseTable {
     pub fn new(width: u32, height: u32, m: &ImageModel, rng: &mut SimRng) -> Self {
         let frame_len = width as usize * height as usize;
         let data = (0..NOISE_OFFSETS + frame_len)
-            .map(|_| (m.background + rng.gauss(m.noise_sigma)).round().clamp(0.0, 255.0) as u8)
+            .map(|_| {
+                (m.background + rng.gauss(m.noise_sigma))
+                    .round()
+                    .clamp(0.0, 255.0) as u8
+            })
             .collect();
         NoiseTable { data, frame_len }
     }
 
     /// Renders a frame: noise background plus Gaussian spots (saturating at 255).
-    pub fn render(
-        &self,
-        width: u32,
-        height: u32,
-        spots: &[Spot],
-        rng: &mut SimRng,
-    ) -> GrayImage {
+    pub fn render(&self, width: u32, height: u32, spots: &[Spot], rng: &mut SimRng) -> GrayImage {
         let off = rng.below(NOISE_OFFSETS as u64) as usize;
         let mut img = GrayImage {
             width,

@@ -78,19 +78,31 @@ pub struct Kinematics {
 
 /// Differentiation step for the kinematics, seconds.
 const H: f64 = 1e-3;
+/// Averaging window of the sensors' output filter: one sample period, seconds.
+pub const FILTER_WINDOW_S: f64 = 0.01;
 
-/// Ideal kinematics of the trajectory at time `t` (central differences with a 1 ms step).
+/// Ideal kinematics of the trajectory at time `t`, as seen through the sensors' output filter: the mean specific
+/// force and angular velocity over the window `[t - W/2, t + W/2]` (W = 10 ms, one sample period), i.e.
+/// `(v(t + W/2) - v(t - W/2)) / W` with velocities from central differences (1 ms step), and the rotation from
+/// `q(t - W/2)` to `q(t + W/2)` divided by W. Without this filter a curvature discontinuity of the surface (the
+/// rounded box) would show up as single-sample spikes. The Earth field is taken at `t`.
 pub fn kinematics(traj: &Trajectory, cfg: &ImuConfig, t: f64) -> Kinematics {
     let p = |t: f64| {
         let pose = traj.pose(t);
         (pose.tip + pose.q * cfg.lever_arm_m, pose.q)
     };
-    let (pm, qm) = p(t - H);
-    let (p0, q0) = p(t);
-    let (pp, qp) = p(t + H);
-    let acc = (pp - 2.0 * p0 + pm) / (H * H);
-    let dq: UnitQuaternion<f64> = qm.inverse() * qp;
-    let omega = dq.scaled_axis() / (2.0 * H);
+    let half = FILTER_WINDOW_S / 2.0;
+    let (a0, qa) = p(t - half - H);
+    let (a1, _) = p(t - half + H);
+    let (b0, _) = p(t + half - H);
+    let (b1, qb) = p(t + half + H);
+    let (_, q0) = p(t);
+    let v_a = (a1 - a0) / (2.0 * H);
+    let v_b = (b1 - b0) / (2.0 * H);
+    let acc = (v_b - v_a) / FILTER_WINDOW_S;
+    // Mean body rate: rotation between the window ends (the H offsets cancel to first order).
+    let dq: UnitQuaternion<f64> = qa.inverse() * qb;
+    let omega = dq.scaled_axis() / (FILTER_WINDOW_S + 2.0 * H);
     let inv = q0.inverse();
     Kinematics {
         specific_force: inv * (acc - cfg.gravity_world),
@@ -146,7 +158,11 @@ impl Imu {
         let walk = c.gyro_bias_walk * dt.max(0.0).sqrt();
         self.gyro_bias += n3(&mut self.rng, walk);
         let q = |v: V3, per: f64, r: (i16, i16)| {
-            [quantise(v.x, per, r), quantise(v.y, per, r), quantise(v.z, per, r)]
+            [
+                quantise(v.x, per, r),
+                quantise(v.y, per, r),
+                quantise(v.z, per, r),
+            ]
         };
         SensorPacket {
             counter,

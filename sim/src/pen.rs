@@ -85,10 +85,7 @@ impl Pen {
 
     /// LED positions in the world for a pose (tip position, pen -> world rotation).
     pub fn leds_world(&self, tip: &Vector3<f64>, q: &UnitQuaternion<f64>) -> Vec<Vector3<f64>> {
-        self.leds_pen_frame()
-            .iter()
-            .map(|p| tip + q * p)
-            .collect()
+        self.leds_pen_frame().iter().map(|p| tip + q * p).collect()
     }
 
     /// Relative intensity of an LED seen from `eye` (world), for the pen at orientation `q`.

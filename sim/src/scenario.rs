@@ -203,7 +203,8 @@ fn imu_config(rng: &mut SimRng) -> ImuConfig {
         c,
         1.0 + sym(rng),
     );
-    let v = |rng: &mut SimRng, s: f64| V3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s));
+    let v =
+        |rng: &mut SimRng, s: f64| V3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s));
     ImuConfig {
         lever_arm_m: V3::new(-0.10, 0.0, 0.0),
         gravity_world: down * fires_protocol::scale::STANDARD_GRAVITY,

@@ -15,8 +15,8 @@ use crate::rng::SimRng;
 use crate::scenario::{scenario, world_up, MotionSpec, Scenario};
 use crate::SimError;
 use fires_record::{
-    CameraFrame, CameraStream, ExposureTruth, FrameContent, ImuTruth, Meta, PacketFate,
-    PoseTruth, RecordingWriter, RigCalibration, Source, StrokeTruth, WorldTruth,
+    CameraFrame, CameraStream, ExposureTruth, FrameContent, ImuTruth, Meta, PacketFate, PoseTruth,
+    RecordingWriter, RigCalibration, Source, StrokeTruth, WorldTruth,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -336,7 +336,8 @@ pub fn run(
             };
             match &table {
                 Some(table) => {
-                    let spots: Vec<_> = obs.led_spots.iter().chain(&obs.spurious).copied().collect();
+                    let spots: Vec<_> =
+                        obs.led_spots.iter().chain(&obs.spurious).copied().collect();
                     let img = table.render(m.width, m.height, &spots, &mut render_rng);
                     w.write_frame(&frame, Some(&img))?;
                     summary.images += 1;

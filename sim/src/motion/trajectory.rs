@@ -59,6 +59,11 @@ struct DrawParams {
     roll0: f64,
     roll_amp: f64,
     roll_phase: f64,
+    /// Direction (world) the pen leans towards, projected on the tangent plane: chosen per stroke far from every
+    /// normal along the stroke so the projection is well conditioned.
+    lean_ref: V3,
+    /// Curve-parameter spacing of the normal-smoothing kernel (about 20 mm of arc).
+    smooth_ds: f64,
 }
 
 #[derive(Clone, Debug)]
@@ -115,21 +120,27 @@ impl Trajectory {
             stroke_times: Vec::new(),
         };
         let mut prev_end: Option<Pose> = None;
+        let mut prev_roll = rng.range(-PI, PI);
         let mut used = 0;
         while t < duration && used < strokes.len() {
             let idx = used;
             used += 1;
-            let params = DrawParams {
+            traj.strokes = strokes.clone();
+            let length = traj.stroke_length(idx);
+            let mut params = DrawParams {
                 stroke: idx,
                 tilt0: rng.range(style.tilt.0 + 0.09, style.tilt.1 - 0.09),
-                tilt_amp: rng.range(0.0, 0.08),
+                tilt_amp: rng.range(0.0, 0.08) * (length / 0.2).min(1.0),
                 tilt_cycles: rng.range(0.5, 1.5),
                 tilt_phase: rng.range(0.0, 2.0 * PI),
-                roll0: rng.range(-PI, PI),
-                roll_amp: rng.range(0.0, 0.4),
+                roll0: prev_roll + rng.range(-0.4, 0.4),
+                roll_amp: rng.range(0.0, 0.3) * (length / 0.2).min(1.0),
                 roll_phase: rng.range(0.0, 2.0 * PI),
+                smooth_ds: (0.02 / length.max(0.01)).min(0.15),
+                lean_ref: choose_lean(&scene, &strokes[idx].curve),
             };
-            traj.strokes = strokes.clone();
+            params.roll0 -= params.roll_amp * params.roll_phase.sin();
+            prev_roll = params.roll0 + params.roll_amp * (2.0 * PI + params.roll_phase).sin();
             let Some(start) = traj.draw_pose(&params, 0.0) else {
                 continue;
             };
@@ -150,7 +161,12 @@ impl Trajectory {
                         q: pe.q,
                     };
                     let v = rng.range(style.pen_up_speed.0, style.pen_up_speed.1);
-                    push(&mut segs, &mut t, move_time(&pe.tip, &up.tip, v), Segment::Move(pe, up));
+                    push(
+                        &mut segs,
+                        &mut t,
+                        move_time(&pe.tip, &up.tip, v),
+                        Segment::Move(pe, up),
+                    );
                     push(
                         &mut segs,
                         &mut t,
@@ -166,8 +182,12 @@ impl Trajectory {
                 move_time(&above_start.tip, &start.tip, v),
                 Segment::Move(above_start, start),
             );
-            push(&mut segs, &mut t, rng.range(0.1, 0.25), Segment::Hold(start));
-            let length = traj.stroke_length(idx);
+            push(
+                &mut segs,
+                &mut t,
+                rng.range(0.1, 0.25),
+                Segment::Hold(start),
+            );
             let speed = rng.range(style.mean_speed.0, style.mean_speed.1);
             let t_draw = (length / speed).max(0.3);
             stroke_times.push((idx, t, t + t_draw));
@@ -255,7 +275,10 @@ impl Trajectory {
                 q: UnitQuaternion::identity(),
             };
         };
-        let i = self.segs.partition_point(|s| s.t1 <= t).min(self.segs.len() - 1);
+        let i = self
+            .segs
+            .partition_point(|s| s.t1 <= t)
+            .min(self.segs.len() - 1);
         let s = &self.segs[i];
         let tau = if t >= last.t1 {
             1.0
@@ -291,10 +314,26 @@ impl Trajectory {
     fn draw_pose(&self, d: &DrawParams, s: f64) -> Option<Pose> {
         let scene = self.scene.as_ref()?;
         let stroke = self.strokes.get(d.stroke)?;
-        let (p, n) = scene.lift(stroke.curve.uv(s))?;
+        let (p, _) = scene.lift(stroke.curve.uv(s))?;
+        // The hand does not follow every bend of the surface: the pen is tilted relative to the normal averaged
+        // over about +-40 mm of the curve (binomial weights), so the edges of the box do not spin it. Near such
+        // edges the tilt from the local normal can therefore leave the 20-60 degree range.
+        // On open curves the kernel narrows smoothly to zero at the ends (factor sin(pi s)), so it never samples
+        // beyond the curve; on the closed boundary it wraps around.
+        let width = match stroke.curve {
+            crate::motion::Curve::Loop { .. } => d.smooth_ds,
+            crate::motion::Curve::Chord { .. } => d.smooth_ds * (PI * s.clamp(0.0, 1.0)).sin(),
+        };
+        let mut n = V3::zeros();
+        for (k, wk) in [(-2.0, 1.0), (-1.0, 4.0), (0.0, 6.0), (1.0, 4.0), (2.0, 1.0)] {
+            let (_, nk) = scene.lift(stroke.curve.uv(s + k * width))?;
+            n += nk * wk;
+        }
+        let n = n.try_normalize(1e-12)?;
         let tilt = (d.tilt0 + d.tilt_amp * (2.0 * PI * d.tilt_cycles * s + d.tilt_phase).sin())
             .clamp(20f64.to_radians(), 60f64.to_radians());
-        let w = ((scene.eye - p).normalize() + scene.up * 0.6).normalize();
+        // Lean towards the user (up and towards the cameras), see `choose_lean`.
+        let w = d.lean_ref;
         let lean = (w - n * w.dot(&n))
             .try_normalize(1e-9)
             .unwrap_or_else(|| n.cross(&V3::x()).normalize());
@@ -324,6 +363,39 @@ impl Trajectory {
     pub fn end_time(&self) -> f64 {
         self.segs.last().map_or(0.0, |s| s.t1)
     }
+}
+
+/// The lean reference of a stroke: the first of "mostly up", "up and towards the cameras", "mostly towards the
+/// cameras" that stays at least 30 degrees from every surface normal along the stroke (else the best of them).
+fn choose_lean(scene: &Scene, curve: &crate::motion::Curve) -> V3 {
+    let e = (scene.eye - scene.origin).normalize();
+    let candidates = [
+        (scene.up + e * 0.35).normalize(),
+        (scene.up + e).normalize(),
+        (scene.up * 0.35 + e).normalize(),
+    ];
+    let normals: Vec<V3> = curve
+        .sample(32)
+        .into_iter()
+        .filter_map(|uv| scene.lift(uv).map(|(_, n)| n))
+        .collect();
+    let score = |w: &V3| {
+        normals
+            .iter()
+            .map(|n| (w - n * w.dot(n)).norm())
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut best = (candidates[0], -1.0);
+    for c in candidates {
+        let sc = score(&c);
+        if sc >= 0.5 {
+            return c;
+        }
+        if sc > best.1 {
+            best = (c, sc);
+        }
+    }
+    best.0
 }
 
 fn push(segs: &mut Vec<Timed>, t: &mut f64, dt: f64, seg: Segment) {

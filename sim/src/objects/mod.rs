@@ -149,18 +149,14 @@ fn sphere_trace<S: Shape + ?Sized>(shape: &S, origin: &V3, dir: &V3, t_max: f64)
     }
     let k = shape.lipschitz();
     let mut prev = t;
-    for _ in 0..512 {
+    // Sphere tracing with a minimum step of 10 um: far from the surface the steps are d/k (never overshooting),
+    // near it the minimum step crosses it and the crossing is then bracketed in [prev, t] and bisected to
+    // machine precision, so the hit point is a smooth function of the ray (no dependence on the iteration path).
+    for _ in 0..20_000 {
         let d = shape.sdf(&(origin + dir * t));
-        if d < 1e-7 {
-            // Bracket [prev, t] contains the crossing (d(prev) > 0); refine by bisection.
-            let (mut lo, mut hi) = if d < 0.0 { (prev, t) } else { (t, t + 1e-6) };
-            if d >= 0.0 && shape.sdf(&(origin + dir * hi)) >= 0.0 {
-                // Grazing: no crossing.
-                t += 1e-6;
-                prev = t;
-                continue;
-            }
-            for _ in 0..60 {
+        if d < 0.0 {
+            let (mut lo, mut hi) = (prev, t);
+            for _ in 0..80 {
                 let mid = 0.5 * (lo + hi);
                 if shape.sdf(&(origin + dir * mid)) < 0.0 {
                     hi = mid;
@@ -170,11 +166,11 @@ fn sphere_trace<S: Shape + ?Sized>(shape: &S, origin: &V3, dir: &V3, t_max: f64)
             }
             return (lo <= t_max).then_some(lo);
         }
-        prev = t;
-        t += (d / k).max(1e-7);
-        if t > t_end {
+        if t >= t_end {
             return None;
         }
+        prev = t;
+        t = (t + (d / k).max(1e-5)).min(t_end);
     }
     None
 }
