@@ -133,8 +133,10 @@ pub struct StrokeTruth {
     pub kind: StrokeKind,
     /// Host-clock time of the button press (tip touches down), nanoseconds.
     pub start_time_ns: u64,
-    /// Host-clock time of the button release, nanoseconds.
+    /// Host-clock time of the button release, nanoseconds (the end of the recording if `complete` is false).
     pub end_time_ns: u64,
+    /// False when the recording ends before the button release (the last stroke may be cut off).
+    pub complete: bool,
     /// Id of the earlier stroke the start point lies on (None for the boundary).
     pub starts_on: Option<u32>,
     /// Id of the earlier stroke the end point lies on (None for the boundary).

@@ -370,15 +370,16 @@ pub fn run(
     let drawn: Vec<u32> = traj
         .stroke_times()
         .iter()
-        .filter(|s| s.1 < duration_s)
+        .filter(|s| s.1 <= duration_s)
         .map(|s| traj.strokes()[s.0].id)
         .collect();
     let strokes: Vec<StrokeTruth> = traj
         .stroke_times()
         .iter()
-        .filter(|s| s.1 < duration_s)
+        .filter(|s| s.1 <= duration_s)
         .map(|&(idx, t0, t1)| {
             let st = &traj.strokes()[idx];
+            let complete = t1 <= duration_s;
             let t1 = t1.min(duration_s);
             let n = ((t1 - t0) / 0.01).ceil().max(1.0) as usize;
             let tip_polyline_m = (0..=n)
@@ -393,6 +394,7 @@ pub fn run(
                 kind: st.kind,
                 start_time_ns: host_ns(HOST_ORIGIN_NS, t0),
                 end_time_ns: host_ns(HOST_ORIGIN_NS, t1),
+                complete,
                 starts_on: st.starts_on.filter(|id| drawn.contains(id)),
                 ends_on: st.ends_on.filter(|id| drawn.contains(id)),
                 crosses: st

@@ -246,7 +246,21 @@ impl Trajectory {
         }
     }
 
-    /// The planned strokes that were drawn, in order.
+    /// A pen held still at `pose` forever.
+    pub fn stationary(pose: Pose) -> Self {
+        Trajectory {
+            segs: vec![Timed {
+                t0: 0.0,
+                t1: f64::MAX,
+                seg: Segment::Hold(pose),
+            }],
+            scene: None,
+            strokes: Vec::new(),
+            stroke_times: Vec::new(),
+        }
+    }
+
+    /// The planned strokes (indexed by [`Trajectory::stroke_times`]).
     pub fn strokes(&self) -> &[PlannedStroke] {
         &self.strokes
     }
