@@ -68,7 +68,8 @@ impl CameraModel {
     /// Projects a point given in this camera's frame (OpenCV: x right, y down, z forward) to distorted pixel
     /// coordinates; `None` when the point is not in front of the camera.
     pub fn project(&self, p_cam: [f64; 3]) -> Option<[f64; 2]> {
-        if !(p_cam[2] > 1e-9) {
+        // Also rejects NaN depths.
+        if p_cam[2].is_nan() || p_cam[2] <= 1e-9 {
             return None;
         }
         let [xd, yd] = self.distort_normalized(p_cam[0] / p_cam[2], p_cam[1] / p_cam[2]);

@@ -153,8 +153,8 @@ pub fn plan_network(rho: f64, count: usize, rng: &mut SimRng) -> Vec<PlannedStro
     let (a, b, phase, theta0) = (
         rng.range(0.02, 0.07),
         rng.range(0.0, 0.05),
-        rng.range(0.0, 6.283),
-        rng.range(0.0, 6.283),
+        rng.range(0.0, std::f64::consts::TAU),
+        rng.range(0.0, std::f64::consts::TAU),
     );
     let boundary = Curve::Loop {
         rho,
@@ -190,11 +190,11 @@ pub fn plan_network(rho: f64, count: usize, rng: &mut SimRng) -> Vec<PlannedStro
             b: pb,
             bow: rho * rng.range(-0.08, 0.08),
         };
-        let mine = curve.sample(256);
+        let mine = curve.sample(96);
         let crosses = out
             .iter()
             .filter(|s| s.kind == StrokeKind::Crossing)
-            .filter(|s| polylines_cross(&mine, &s.curve.sample(256)))
+            .filter(|s| polylines_cross(&mine, &s.curve.sample(96)))
             .map(|s| s.id)
             .collect();
         out.push(PlannedStroke {

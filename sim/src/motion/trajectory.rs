@@ -111,8 +111,8 @@ impl Trajectory {
         let mut t = 0.0;
         let mut segs: Vec<Timed> = Vec::new();
         let mut stroke_times = Vec::new();
-        // Enough strokes for any duration: planned 64 at a time.
-        let mut strokes = crate::motion::plan_network(scene.rho, 64, rng);
+        // Strokes are planned 24 at a time (about two minutes of drawing).
+        let mut strokes = crate::motion::plan_network(scene.rho, 24, rng);
         let mut traj = Trajectory {
             segs: Vec::new(),
             scene: Some(scene.clone()),
@@ -196,7 +196,7 @@ impl Trajectory {
             prev_end = Some(end);
             if used == strokes.len() && t < duration {
                 // Extremely long session: keep adding crossing curves of a fresh plan (same boundary id 0).
-                let more = crate::motion::plan_network(scene.rho, 64, rng);
+                let more = crate::motion::plan_network(scene.rho, 24, rng);
                 let base = strokes.len() as u32;
                 strokes.extend(more.into_iter().skip(1).map(|mut s| {
                     s.id += base - 1;
