@@ -330,3 +330,124 @@ pub fn draw_spot(img: &mut GrayImage, s: &Spot) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::trajectory::orientation_from_axis;
+    use crate::objects::ObjectKind;
+    use fires_record::{CameraModel, Extrinsics};
+
+    fn camera() -> CameraConfig {
+        let image = ImageModel {
+            background: 10.0,
+            noise_sigma: 0.0,
+            gain: 500.0,
+            led_diameter_m: 0.005,
+            blur_px: 1.0,
+        };
+        CameraConfig {
+            cal: CalibratedCamera {
+                intrinsics: CameraModel::from_hfov(640, 480, 1.0),
+                extrinsics: Extrinsics::IDENTITY,
+            },
+            rate_hz: 15.0,
+            offset_s: 0.0,
+            jitter_s: 0.0,
+            timestamp_noise_s: 0.0,
+            output: CameraOutput::Images(image),
+            min_brightness: 0.02,
+            reflection_rate: 0.0,
+            sunlight_rate: 0.0,
+        }
+    }
+
+    /// The pen 1 m in front of the camera, pointing away from it (LEDs facing the camera).
+    fn pose(tip: V3) -> Pose {
+        Pose {
+            tip,
+            q: orientation_from_axis(&V3::z(), 0.0),
+        }
+    }
+
+    #[test]
+    fn leds_behind_an_object_or_the_hand_are_occluded() {
+        let cam = camera();
+        let pen = Pen::fires_default();
+        let mut rng = SimRng::stream(1, 1);
+        let p = pose(V3::new(0.0, 0.0, 1.0));
+        let free = cam.observe(&p, &pen, None, None, &mut rng);
+        assert!(free
+            .leds
+            .iter()
+            .all(|l| l.visibility == Visibility::Visible));
+        assert_eq!(free.led_spots.len(), 4);
+        // A sphere between the pen and the camera hides every LED.
+        let shape = ObjectKind::Sphere.build(V3::new(0.0, 0.0, 0.5), 0.05, V3::new(0.0, -1.0, 0.0));
+        let scene = Scene::new(shape, V3::z(), V3::new(0.0, -1.0, 0.0), V3::zeros(), 0.02);
+        let hidden = cam.observe(&p, &pen, Some(&scene), None, &mut rng);
+        assert!(hidden
+            .leds
+            .iter()
+            .all(|l| l.visibility == Visibility::OccludedByObject));
+        // A hand sphere on the camera side of LED 2 hides LED 2 only.
+        let led2 = pen.leds_pen_frame()[1];
+        // Pen off the optical axis, hand 3 cm from LED 2 on the line to the camera.
+        let p = pose(V3::new(0.3, 0.0, 1.0));
+        let led2_world = p.tip + p.q * led2;
+        let h_world = led2_world + (V3::zeros() - led2_world).normalize() * 0.03;
+        let hand = HandModel {
+            centre_pen: p.q.inverse() * (h_world - p.tip),
+            radius: 0.01,
+        };
+        let o = cam.observe(&p, &pen, None, Some(&hand), &mut rng);
+        let vis: Vec<_> = o.leds.iter().map(|l| l.visibility).collect();
+        assert_eq!(vis[1], Visibility::OccludedByHand);
+        assert_eq!(vis[0], Visibility::Visible);
+        assert_eq!(vis[2], Visibility::Visible);
+        // Brightness falls with the square of the distance.
+        let far = cam.observe(&pose(V3::new(0.0, 0.0, 2.0)), &pen, None, None, &mut rng);
+        let ratio = free.leds[0].brightness / far.leds[0].brightness;
+        let (d1, d2) = (1.0 - 0.02, 2.0 - 0.02);
+        assert!((ratio - (d2 * d2) / (d1 * d1)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn spots_are_rendered_where_the_leds_project() {
+        let cam = camera();
+        let mut rng = SimRng::stream(2, 2);
+        let table = NoiseTable::new(640, 480, cam.output.image_model(), &mut rng);
+        let spot = Spot {
+            px: [100.3, 200.7],
+            peak: 150.0,
+            sigma: 1.5,
+        };
+        let img = table.render(640, 480, &[spot], &mut rng);
+        let at = |x: usize, y: usize| img.data[y * 640 + x];
+        assert_eq!(
+            at(100, 201),
+            10 + (150.0f64 * (-(0.09 + 0.09) / 4.5f64).exp()).round() as u8
+        );
+        assert_eq!(at(10, 10), 10);
+        // Intensity-weighted centroid of the background-subtracted window is the spot centre.
+        let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
+        for y in 190..212 {
+            for x in 90..112 {
+                let w = f64::from(at(x, y)) - 10.0;
+                sx += w * x as f64;
+                sy += w * y as f64;
+                sw += w;
+            }
+        }
+        assert!((sx / sw - 100.3).abs() < 0.05 && (sy / sw - 200.7).abs() < 0.05);
+    }
+
+    #[test]
+    fn poisson_has_the_right_mean() {
+        let mut rng = SimRng::stream(3, 3);
+        let n = 20_000;
+        let total: u32 = (0..n).map(|_| poisson(&mut rng, 0.3)).sum();
+        assert!((f64::from(total) / f64::from(n) - 0.3).abs() < 0.02);
+        assert_eq!(poisson(&mut rng, 0.0), 0);
+    }
+}

@@ -172,3 +172,18 @@ impl Imu {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantisation_rounds_and_saturates() {
+        assert_eq!(quantise(0.0, 0.1, ACCEL_RANGE_COUNTS), 0);
+        assert_eq!(quantise(0.149, 0.1, ACCEL_RANGE_COUNTS), 1);
+        assert_eq!(quantise(-0.151, 0.1, ACCEL_RANGE_COUNTS), -2);
+        assert_eq!(quantise(1e9, 0.1, ACCEL_RANGE_COUNTS), 2047);
+        assert_eq!(quantise(-1e9, 0.1, MAG_RANGE_COUNTS), -10000);
+        assert_eq!(quantise(f64::NAN, 0.1, GYRO_RANGE_COUNTS), 0);
+    }
+}

@@ -283,3 +283,90 @@ pub fn transmit(
         disconnects,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn packets(n: usize, cfg: &LinkConfig, buttons_at: impl Fn(usize) -> u8) -> Vec<Produced> {
+        let mut fw = PenFirmware::new(cfg.status_period_s);
+        let mut rng = SimRng::stream(1, 1);
+        let mut out = Vec::new();
+        for k in 0..n {
+            let p = SensorPacket {
+                counter: k as u8,
+                ..SensorPacket::default()
+            };
+            fw.on_sample(
+                k as f64 * 0.01,
+                k as u64 * 10_000,
+                p,
+                buttons_at(k),
+                cfg,
+                &mut rng,
+                &mut out,
+            );
+        }
+        out
+    }
+
+    #[test]
+    fn status_packets_follow_the_protocol_rules() {
+        let cfg = LinkConfig {
+            pen_drop_prob: 0.05,
+            ..LinkConfig::clean()
+        };
+        let out = packets(450, &cfg, |k| u8::from((100..250).contains(&k)));
+        let mut last_sent: Option<u8> = None;
+        let mut seq = 0u8;
+        let mut reasons = Vec::new();
+        for p in &out {
+            match p.frame {
+                Frame::Sensor(s) if !p.pen_dropped => last_sent = Some(s.counter),
+                Frame::Sensor(_) => {}
+                Frame::Status(s) => {
+                    assert_eq!(s.sequence, seq);
+                    seq = seq.wrapping_add(1);
+                    assert_eq!(s.sensor_counter, last_sent.unwrap_or(0xFF));
+                    reasons.push((s.reason, s.buttons.0));
+                }
+            }
+        }
+        // Boot, periodic at 1 s intervals (k = 100, 200, 300, 400) and two button changes (k = 100, 250).
+        assert_eq!(reasons[0].0, StatusReason::Boot);
+        let changes: Vec<_> = reasons
+            .iter()
+            .filter(|r| r.0 == StatusReason::ButtonChange)
+            .collect();
+        assert_eq!(changes.len(), 2);
+        assert_eq!((changes[0].1, changes[1].1), (1, 0));
+        assert_eq!(
+            reasons.len(),
+            1 + 4 + 2 - 1,
+            "the button change at 1 s also serves as that second's report"
+        );
+    }
+
+    #[test]
+    fn the_uart_runs_at_230400_baud_and_delivery_is_in_order() {
+        let cfg = LinkConfig::clean();
+        let out = packets(300, &cfg, |_| 0);
+        let link = transmit(&out, &cfg, 0, &mut SimRng::stream(2, 2));
+        let bytes: usize = link.chunks.iter().map(|c| c.bytes.len()).sum();
+        assert_eq!(bytes, out.len() * FRAME_LEN);
+        let sent: Vec<u8> = out.iter().flat_map(|p| p.frame.encode()).collect();
+        let got: Vec<u8> = link.chunks.iter().flat_map(|c| c.bytes.clone()).collect();
+        assert_eq!(got, sent);
+        assert!(link
+            .chunks
+            .windows(2)
+            .all(|w| w[0].host_time_ns <= w[1].host_time_ns));
+        // Sensor and status packets sent back to back occupy the UART for 22 * 10 / 230400 s each.
+        let t: Vec<u64> = link.truth.iter().map(|p| p.send_time_ns).collect();
+        let frame_ns = (22.0 * 10.0 / 230_400.0 * 1e9) as u64;
+        assert!(t.windows(2).all(|w| w[1] >= w[0] + frame_ns - 1));
+        // Latency: every byte arrives after it was sent, at least the fixed latency later.
+        let first = link.chunks[0].host_time_ns;
+        assert!(first >= t[0] + frame_ns + (cfg.latency_s * 1e9) as u64 - 1);
+    }
+}

@@ -80,3 +80,34 @@ impl SimRng {
         -mean * (1.0 - self.uniform()).ln()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn streams_are_deterministic_and_independent() {
+        let a: Vec<u64> = (0..4).map(|_| SimRng::stream(7, 1).next_u64()).collect();
+        assert!(a.windows(2).all(|w| w[0] == w[1]));
+        assert_ne!(
+            SimRng::stream(7, 1).next_u64(),
+            SimRng::stream(7, 2).next_u64()
+        );
+        assert_ne!(
+            SimRng::stream(7, 1).next_u64(),
+            SimRng::stream(8, 1).next_u64()
+        );
+    }
+
+    #[test]
+    fn normal_has_unit_variance() {
+        let mut r = SimRng::stream(1, 0);
+        let n = 50_000;
+        let xs: Vec<f64> = (0..n).map(|_| r.normal()).collect();
+        let mean = xs.iter().sum::<f64>() / n as f64;
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
+        assert!(mean.abs() < 0.02 && (var - 1.0).abs() < 0.03);
+        assert!((0..1000).all(|_| r.below(10) < 10));
+        assert_eq!(r.gauss(0.0), 0.0);
+    }
+}

@@ -133,7 +133,7 @@ pub fn build_trajectory(sc: &Scenario, seed: u64, duration_s: f64) -> Trajectory
         }
         MotionSpec::Free(free) => {
             let free = *free;
-            Trajectory::free(duration_s, free, eye, &mut rng, |rng, depth| {
+            Trajectory::free(duration_s, free, &mut rng, |rng, depth| {
                 let mut best = None;
                 for _ in 0..200 {
                     let z = depth + rng.range(-0.03, 0.03);

@@ -192,3 +192,57 @@ fn blobs_and_images_show_the_visible_leds() {
     }
     assert!(bright > 20);
 }
+
+#[test]
+fn a_moving_pen_reads_the_closed_form_specific_force_and_rate() {
+    // Minimum-jerk translation by L along world x in T seconds at constant orientation, then a minimum-jerk
+    // rotation by theta about the pen's own x axis (the IMU sits on that axis, so no lever-arm terms).
+    let sc = scenario("fires-v1", 1, 1.0, None).unwrap();
+    let cfg = sc.imu.ideal();
+    let q = orientation_from_axis(&V3::new(0.2, 0.4, 0.9).normalize(), 0.3);
+    let a = Pose {
+        tip: V3::new(0.0, 0.0, 0.8),
+        q,
+    };
+    let (l, big_t) = (0.2, 1.0);
+    let b = Pose {
+        tip: a.tip + V3::new(l, 0.0, 0.0),
+        q,
+    };
+    let theta = 1.2;
+    let rot = nalgebra::UnitQuaternion::from_axis_angle(&nalgebra::Vector3::x_axis(), theta);
+    let c = Pose {
+        tip: b.tip,
+        q: q * rot,
+    };
+    let traj = Trajectory::waypoints(a, 0.5, &[(big_t, b), (big_t, c)]);
+    let mj1 = |u: f64| 30.0 * u * u - 60.0 * u.powi(3) + 30.0 * u.powi(4);
+    let w = fires_sim::imu::FILTER_WINDOW_S;
+    for &t in &[0.6, 0.8, 1.0, 1.3, 1.45] {
+        // Mean acceleration over the filter window = velocity difference / window.
+        let v = |t: f64| l / big_t * mj1(((t - 0.5) / big_t).clamp(0.0, 1.0));
+        let acc = V3::new((v(t + w / 2.0) - v(t - w / 2.0)) / w, 0.0, 0.0);
+        let expected = q.inverse() * (acc - cfg.gravity_world);
+        let k = kinematics(&traj, &cfg, t);
+        assert!(
+            (k.specific_force - expected).norm() < 1e-3,
+            "t={t}: {} vs {expected}",
+            k.specific_force
+        );
+        assert!(k.angular_velocity.norm() < 1e-9);
+    }
+    let h = 1e-3;
+    for &t in &[1.7, 2.0, 2.2] {
+        let m = |t: f64| fires_sim::motion::min_jerk((t - 1.5) / big_t);
+        let rate = theta * (m(t + w / 2.0 + h) - m(t - w / 2.0 - h)) / (w + 2.0 * h);
+        let k = kinematics(&traj, &cfg, t);
+        assert!(
+            (k.angular_velocity - V3::new(rate, 0.0, 0.0)).norm() < 1e-9,
+            "t={t}: {}",
+            k.angular_velocity
+        );
+        // Pure rotation about the axis through the IMU: specific force is gravity only.
+        let expected = traj.pose(t).q.inverse() * (-cfg.gravity_world);
+        assert!((k.specific_force - expected).norm() < 1e-6);
+    }
+}

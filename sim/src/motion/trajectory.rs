@@ -211,16 +211,14 @@ impl Trajectory {
         traj
     }
 
-    /// Free motion through random waypoints (the `bar` and `tip` scenarios); `accept` says whether a pose is
-    /// usable (e.g. all LEDs in both images); `eye` is where the cameras are.
+    /// Free motion through random waypoints (the `bar` and `tip` scenarios): `sample_pose(rng, depth)` draws a
+    /// waypoint at about that depth; the depth sweeps the range back and forth.
     pub fn free(
         duration: f64,
         motion: FreeMotion,
-        eye: V3,
         rng: &mut SimRng,
         mut sample_pose: impl FnMut(&mut SimRng, f64) -> Pose,
     ) -> Self {
-        let _ = (eye, motion.max_off_axis);
         let mut t = 0.0;
         let mut segs = Vec::new();
         let mut cur = sample_pose(rng, motion.depth.0);
@@ -238,6 +236,26 @@ impl Trajectory {
             cur = next;
             k += 1;
         }
+        Trajectory {
+            segs,
+            scene: None,
+            strokes: Vec::new(),
+            stroke_times: Vec::new(),
+        }
+    }
+
+    /// A pen resting at `start` for `hold` seconds, then rest-to-rest minimum-jerk moves `(duration, target)`,
+    /// then resting at the last target.
+    pub fn waypoints(start: Pose, hold: f64, legs: &[(f64, Pose)]) -> Self {
+        let mut t = 0.0;
+        let mut segs = Vec::new();
+        push(&mut segs, &mut t, hold, Segment::Hold(start));
+        let mut cur = start;
+        for &(dt, next) in legs {
+            push(&mut segs, &mut t, dt, Segment::Move(cur, next));
+            cur = next;
+        }
+        push(&mut segs, &mut t, f64::MAX, Segment::Hold(cur));
         Trajectory {
             segs,
             scene: None,
@@ -437,4 +455,53 @@ pub fn random_direction_near(axis: &V3, max_angle: f64, rng: &mut SimRng) -> V3 
     let u = axis.cross(&helper).normalize();
     let v = axis.cross(&u);
     axis * c + (u * phi.cos() + v * phi.sin()) * s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn min_jerk_starts_and_ends_at_rest() {
+        assert_eq!(min_jerk(0.0), 0.0);
+        assert_eq!(min_jerk(1.0), 1.0);
+        assert!((min_jerk(0.5) - 0.5).abs() < 1e-15);
+        let h = 1e-6;
+        let d = |t: f64| (min_jerk(t + h) - min_jerk(t - h)) / (2.0 * h);
+        assert!(d(h).abs() < 1e-9 && d(1.0 - h).abs() < 1e-9);
+        // Peak speed of a minimum-jerk move is 1.875 times the mean.
+        assert!((d(0.5) - 1.875).abs() < 1e-6);
+    }
+
+    #[test]
+    fn orientation_from_axis_maps_pen_x_to_the_axis() {
+        for axis in [
+            V3::z(),
+            V3::x(),
+            V3::new(0.3, -0.5, 0.8).normalize(),
+            V3::new(0.0, 1.0, 1e-3).normalize(),
+        ] {
+            for roll in [0.0, 1.0, -2.5] {
+                let q = orientation_from_axis(&axis, roll);
+                assert!((q * V3::x() - axis).norm() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn waypoint_moves_follow_the_minimum_jerk_profile() {
+        let q = UnitQuaternion::identity();
+        let a = Pose {
+            tip: V3::zeros(),
+            q,
+        };
+        let b = Pose {
+            tip: V3::new(0.2, 0.0, 0.0),
+            q,
+        };
+        let traj = Trajectory::waypoints(a, 0.5, &[(1.0, b)]);
+        assert_eq!(traj.pose(0.2).tip, a.tip);
+        assert!((traj.pose(0.75).tip.x - 0.2 * min_jerk(0.25)).abs() < 1e-15);
+        assert_eq!(traj.pose(5.0).tip, b.tip);
+    }
 }
