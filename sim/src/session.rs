@@ -128,7 +128,7 @@ pub fn build_trajectory(sc: &Scenario, seed: u64, duration_s: f64) -> Trajectory
             let up = world_up();
             let shape = object.build(*centre, *size, up);
             let view = (centre - eye).normalize();
-            let scene = Arc::new(Scene::new(shape, view, up, eye, 0.5 * size));
+            let scene = Arc::new(Scene::new(shape, view, up, eye, 0.55 * size));
             Trajectory::drawing(scene, duration_s, *style, &mut rng)
         }
         MotionSpec::Free(free) => {

@@ -19,7 +19,8 @@ fn strokes_lie_on_the_object_with_realistic_tilt_and_speed() {
         for &(idx, t0, t1) in traj.stroke_times() {
             let stroke = &traj.strokes()[idx];
             if stroke.kind == StrokeKind::Crossing {
-                assert_eq!((stroke.starts_on, stroke.ends_on), (Some(0), Some(0)));
+                assert_eq!(stroke.starts_on, Some(0));
+                assert!(stroke.ends_on.is_some_and(|e| e < stroke.id));
             }
             let n = 200;
             let mut prev = traj.pose(t0).tip;
@@ -79,22 +80,36 @@ fn the_network_is_a_boundary_then_crossing_curves_ending_on_it() {
     let b = &strokes[0].tip_polyline_m;
     let closing = b.first().zip(b.last()).map(|(p, q)| dist(p, q)).unwrap();
     assert!(closing < 1e-9, "boundary is closed ({closing})");
-    let on_boundary = |p: &[f64; 3]| {
-        b.windows(2)
+    let on = |id: u32, p: &[f64; 3]| {
+        let s = strokes.iter().find(|s| s.id == id).unwrap();
+        s.tip_polyline_m
+            .windows(2)
             .map(|w| seg_dist(p, &w[0], &w[1]))
             .fold(f64::MAX, f64::min)
     };
-    assert!(strokes[..strokes.len() - 1].iter().all(|s| s.complete));
+    let mut t_junctions = 0;
     for s in strokes[1..].iter().filter(|s| s.complete) {
         assert_eq!(s.kind, StrokeKind::Crossing);
+        let (start, end) = (s.starts_on.unwrap(), s.ends_on.unwrap());
+        assert!(start < s.id && end < s.id, "ends lie on earlier curves");
         let (first, last) = (s.tip_polyline_m[0], *s.tip_polyline_m.last().unwrap());
         assert!(
-            on_boundary(&first) < 2e-4 && on_boundary(&last) < 2e-4,
-            "stroke {} ends off the boundary",
+            on(start, &first) < 2e-4,
+            "stroke {} starts off stroke {start}",
+            s.id
+        );
+        assert!(
+            on(end, &last) < 2e-4,
+            "stroke {} ends off stroke {end}",
             s.id
         );
         assert!(s.start_time_ns < s.end_time_ns);
+        t_junctions += usize::from(end != 0);
     }
+    assert!(
+        t_junctions >= 1,
+        "some curves end on an earlier crossing curve"
+    );
     // Later crossing curves cross earlier ones.
     assert!(strokes[2..].iter().any(|s| !s.crosses.is_empty()));
     // Button presses in the link match the strokes (status packets on button change).

@@ -83,14 +83,17 @@ pub enum Curve {
         /// Start angle.
         theta0: f64,
     },
-    /// Bowed chord from `a` to `b`: `a + (b - a) s + n bow sin(pi s)` with `n` the left normal of `b - a`.
+    /// Bowed chord from `a` towards `b`: `c(r) = a + (b - a) r + n bow sin(pi r)` with `n` the left normal of
+    /// `b - a`, drawn for `r = span * s` (`span < 1` stops it where it meets an earlier curve).
     Chord {
         /// Start point.
         a: [f64; 2],
-        /// End point.
+        /// End point of the full chord.
         b: [f64; 2],
         /// Bow, plane metres.
         bow: f64,
+        /// Fraction of the full chord that is drawn.
+        span: f64,
     },
 }
 
@@ -109,7 +112,8 @@ impl Curve {
                 let r = loop_radius(rho, a, b, phase, th);
                 [r * th.cos(), r * th.sin()]
             }
-            Curve::Chord { a, b, bow } => {
+            Curve::Chord { a, b, bow, span } => {
+                let s = s * span;
                 let d = [b[0] - a[0], b[1] - a[1]];
                 let len = (d[0] * d[0] + d[1] * d[1]).sqrt().max(1e-12);
                 let n = [-d[1] / len, d[0] / len];
@@ -146,9 +150,11 @@ pub struct PlannedStroke {
     pub crosses: Vec<u32>,
 }
 
-/// Plans `count` strokes in a disc of radius `rho`: stroke 0 is the closed boundary; every later stroke is a
-/// chord with both ends on the boundary that crosses earlier chords (directions spread by the golden angle, so
-/// every pair crosses inside the boundary).
+/// Plans `count` strokes in a disc of radius `rho`: stroke 0 is the closed boundary; the later strokes are
+/// chords of two roughly perpendicular families, alternating, with offsets that fill the disc progressively
+/// (van der Corput order), so the network grows like a grid and every chord crosses the chords of the other
+/// family drawn before it. A chord starts on the boundary and ends on it, or, for about a third of the chords
+/// from the fourth stroke on, exactly on the last earlier chord it meets (a T junction).
 pub fn plan_network(rho: f64, count: usize, rng: &mut SimRng) -> Vec<PlannedStroke> {
     let (a, b, phase, theta0) = (
         rng.range(0.02, 0.07),
@@ -171,11 +177,12 @@ pub fn plan_network(rho: f64, count: usize, rng: &mut SimRng) -> Vec<PlannedStro
         ends_on: None,
         crosses: Vec::new(),
     }];
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     let alpha0 = rng.range(0.0, std::f64::consts::PI);
     for k in 1..count {
-        let alpha = alpha0 + golden * k as f64 + rng.range(-0.1, 0.1);
-        let offset = rho * rng.range(-0.25, 0.25);
+        let family = (k - 1) % 2;
+        let m = (k - 1) / 2;
+        let alpha = alpha0 + std::f64::consts::FRAC_PI_2 * family as f64 + rng.range(-0.12, 0.12);
+        let offset = rho * (1.3 * (van_der_corput(m as u64 + 1) - 0.5) + rng.range(-0.03, 0.03));
         let dir = [alpha.cos(), alpha.sin()];
         let foot = [-dir[1] * offset, dir[0] * offset];
         let end_plus = boundary_hit(foot, dir, rho, a, b, phase);
@@ -185,13 +192,28 @@ pub fn plan_network(rho: f64, count: usize, rng: &mut SimRng) -> Vec<PlannedStro
         } else {
             (end_minus, end_plus)
         };
-        let curve = Curve::Chord {
+        let mut curve = Curve::Chord {
             a: pa,
             b: pb,
-            bow: rho * rng.range(-0.08, 0.08),
+            bow: rho * rng.range(-0.06, 0.06),
+            span: 1.0,
         };
+        let mut ends_on = 0;
+        if k >= 3 && rng.chance(0.35) {
+            // Stop at the last crossing with an earlier chord, if it leaves at least 40% of the chord.
+            let best = out
+                .iter()
+                .filter(|s| s.kind == StrokeKind::Crossing)
+                .filter_map(|s| curve_intersection(&curve, &s.curve).map(|(r, _)| (r, s.id)))
+                .filter(|&(r, _)| r > 0.4 && r < 0.95)
+                .max_by(|a, b| a.0.total_cmp(&b.0));
+            if let (Some((r, id)), Curve::Chord { span, .. }) = (best, &mut curve) {
+                *span = r;
+                ends_on = id;
+            }
+        }
         let mine = curve.sample(96);
-        let crosses = out
+        let crosses: Vec<u32> = out
             .iter()
             .filter(|s| s.kind == StrokeKind::Crossing)
             .filter(|s| polylines_cross(&mine, &s.curve.sample(96)))
@@ -202,11 +224,22 @@ pub fn plan_network(rho: f64, count: usize, rng: &mut SimRng) -> Vec<PlannedStro
             kind: StrokeKind::Crossing,
             curve,
             starts_on: Some(0),
-            ends_on: Some(0),
-            crosses,
+            ends_on: Some(ends_on),
+            crosses: crosses.into_iter().filter(|&id| id != ends_on).collect(),
         });
     }
     out
+}
+
+/// The van der Corput sequence in base 2 (0.5, 0.25, 0.75, 0.125, ...).
+fn van_der_corput(mut n: u64) -> f64 {
+    let (mut v, mut denom) = (0.0, 1.0);
+    while n > 0 {
+        denom *= 2.0;
+        v += (n & 1) as f64 / denom;
+        n >>= 1;
+    }
+    v
 }
 
 /// Where the ray `foot + t dir` (foot inside) leaves the star-shaped boundary loop (bisection to 1e-14).
@@ -226,6 +259,59 @@ fn boundary_hit(foot: [f64; 2], dir: [f64; 2], rho: f64, a: f64, b: f64, phase: 
         }
     }
     [foot[0] + dir[0] * lo, foot[1] + dir[1] * lo]
+}
+
+/// Parameters `(s, u)` of an interior crossing of curves `p` and `q` (the one with the largest `s`), refined by
+/// Newton's method to machine precision.
+pub fn curve_intersection(p: &Curve, q: &Curve) -> Option<(f64, f64)> {
+    let n = 96;
+    let (ps, qs) = (p.sample(n), q.sample(n));
+    let mut found = None;
+    for i in 0..n {
+        for j in 0..n {
+            if let Some((a, b)) = segment_params(ps[i], ps[i + 1], qs[j], qs[j + 1]) {
+                let s = (i as f64 + a) / n as f64;
+                if found.is_none_or(|(fs, _)| s > fs) {
+                    found = Some((s, (j as f64 + b) / n as f64));
+                }
+            }
+        }
+    }
+    let (mut s, mut u) = found?;
+    for _ in 0..30 {
+        let (a, b) = (p.uv(s), q.uv(u));
+        let f = [a[0] - b[0], a[1] - b[1]];
+        if f[0].abs().max(f[1].abs()) < 1e-15 {
+            break;
+        }
+        let h = 1e-7;
+        let (ps1, qu1) = (p.uv(s + h), q.uv(u + h));
+        let j = [
+            [(ps1[0] - a[0]) / h, -(qu1[0] - b[0]) / h],
+            [(ps1[1] - a[1]) / h, -(qu1[1] - b[1]) / h],
+        ];
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if det.abs() < 1e-300 {
+            return None;
+        }
+        s -= (j[1][1] * f[0] - j[0][1] * f[1]) / det;
+        u -= (-j[1][0] * f[0] + j[0][0] * f[1]) / det;
+    }
+    ((0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&u)).then_some((s, u))
+}
+
+/// Parameters along two segments of their proper intersection.
+fn segment_params(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> Option<(f64, f64)> {
+    let r = [b[0] - a[0], b[1] - a[1]];
+    let q = [d[0] - c[0], d[1] - c[1]];
+    let den = r[0] * q[1] - r[1] * q[0];
+    if den.abs() < 1e-300 {
+        return None;
+    }
+    let w = [c[0] - a[0], c[1] - a[1]];
+    let t = (w[0] * q[1] - w[1] * q[0]) / den;
+    let u = (w[0] * r[1] - w[1] * r[0]) / den;
+    ((0.0..1.0).contains(&t) && (0.0..1.0).contains(&u)).then_some((t, u))
 }
 
 /// Whether two polylines cross at interior points (segment-segment proper intersection).
