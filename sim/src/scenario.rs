@@ -241,6 +241,7 @@ fn default_hand() -> HandModel {
 fn drawing_style() -> DrawStyle {
     DrawStyle {
         mean_speed: (0.05, 0.15),
+        max_speed: 0.28,
         tilt: (20f64.to_radians(), 60f64.to_radians()),
         pen_up_speed: (0.15, 0.3),
     }
@@ -353,6 +354,7 @@ pub fn scenario(
                     size: 0.08,
                     style: DrawStyle {
                         mean_speed: (0.15, 0.5),
+                        max_speed: 0.8,
                         tilt: (20f64.to_radians(), 60f64.to_radians()),
                         pen_up_speed: (0.5, 1.2),
                     },

@@ -78,6 +78,8 @@ struct Timed {
 pub struct DrawStyle {
     /// Mean drawing speed range, m/s (peak is about 1.9 times the mean).
     pub mean_speed: (f64, f64),
+    /// Peak drawing speed limit, m/s (strokes are slowed down to respect it).
+    pub max_speed: f64,
     /// Pen tilt from the surface normal, radians.
     pub tilt: (f64, f64),
     /// Peak pen-up speed range, m/s.
@@ -126,7 +128,7 @@ impl Trajectory {
             let idx = used;
             used += 1;
             traj.strokes = strokes.clone();
-            let length = traj.stroke_length(idx);
+            let (length, max_rate) = traj.stroke_length(idx);
             let mut params = DrawParams {
                 stroke: idx,
                 tilt0: rng.range(style.tilt.0 + 0.09, style.tilt.1 - 0.09),
@@ -189,7 +191,10 @@ impl Trajectory {
                 Segment::Hold(start),
             );
             let speed = rng.range(style.mean_speed.0, style.mean_speed.1);
-            let t_draw = (length / speed).max(0.3);
+            // Minimum-jerk progress peaks at 1.875 times the mean rate; |dp/ds| varies along the lifted curve.
+            let t_draw = (length / speed)
+                .max(1.875 * max_rate / style.max_speed)
+                .max(0.3);
             stroke_times.push((idx, t, t + t_draw));
             push(&mut segs, &mut t, t_draw, Segment::Draw(params));
             push(&mut segs, &mut t, rng.range(0.08, 0.2), Segment::Hold(end));
@@ -377,18 +382,22 @@ impl Trajectory {
         })
     }
 
-    /// Approximate length of stroke `i` on the surface, metres.
-    fn stroke_length(&self, i: usize) -> f64 {
+    /// Approximate length of stroke `i` on the surface (metres) and the largest `|dp/ds|` along it.
+    fn stroke_length(&self, i: usize) -> (f64, f64) {
         let (Some(scene), Some(st)) = (self.scene.as_ref(), self.strokes.get(i)) else {
-            return 0.0;
+            return (0.0, 0.0);
         };
+        let n = 256;
         let pts: Vec<V3> = st
             .curve
-            .sample(128)
+            .sample(n)
             .into_iter()
             .filter_map(|uv| scene.lift(uv).map(|(p, _)| p))
             .collect();
-        pts.windows(2).map(|w| (w[1] - w[0]).norm()).sum()
+        let steps = pts.windows(2).map(|w| (w[1] - w[0]).norm());
+        let length = steps.clone().sum();
+        let max_rate = steps.fold(0.0, f64::max) * n as f64;
+        (length, max_rate)
     }
 
     /// End of the planned timeline, seconds.
