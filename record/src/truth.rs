@@ -39,7 +39,8 @@ pub struct ImuTruth {
     pub buttons: u8,
 }
 
-/// Why an LED is or is not seen by a camera in one exposure.
+/// Why an LED is or is not seen by a camera in one exposure (the first reason that applies, in declaration
+/// order).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Visibility {

@@ -143,12 +143,12 @@ impl CameraConfig {
                 Visibility::BehindCamera
             } else if !pixel.is_some_and(|p| self.cal.intrinsics.contains(p)) {
                 Visibility::OutOfView
-            } else if brightness < self.min_brightness {
-                Visibility::TooDim
             } else if scene.is_some_and(|s| s.shape.blocks_segment(led, &centre, 1e-4)) {
                 Visibility::OccludedByObject
             } else if hand_world.is_some_and(|(c, r)| segment_hits_sphere(led, &centre, &c, r)) {
                 Visibility::OccludedByHand
+            } else if brightness < self.min_brightness {
+                Visibility::TooDim
             } else {
                 Visibility::Visible
             };

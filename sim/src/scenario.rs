@@ -244,6 +244,9 @@ fn drawing_style() -> DrawStyle {
         max_speed: 0.28,
         tilt: (20f64.to_radians(), 60f64.to_radians()),
         pen_up_speed: (0.15, 0.3),
+        away_lean_prob: 0.0,
+        extent: 0.55,
+        view_yaw: 0.0,
     }
 }
 
@@ -357,6 +360,9 @@ pub fn scenario(
                         max_speed: 0.8,
                         tilt: (20f64.to_radians(), 60f64.to_radians()),
                         pen_up_speed: (0.5, 1.2),
+                        away_lean_prob: 0.3,
+                        extent: 0.65,
+                        view_yaw: 75f64.to_radians(),
                     },
                 },
                 link,

@@ -127,8 +127,12 @@ pub fn build_trajectory(sc: &Scenario, seed: u64, duration_s: f64) -> Trajectory
         } => {
             let up = world_up();
             let shape = object.build(*centre, *size, up);
-            let view = (centre - eye).normalize();
-            let scene = Arc::new(Scene::new(shape, view, up, eye, 0.55 * size));
+            let yaw = nalgebra::Rotation3::from_axis_angle(
+                &nalgebra::Unit::new_normalize(up),
+                style.view_yaw,
+            );
+            let view = yaw * (centre - eye).normalize();
+            let scene = Arc::new(Scene::new(shape, view, up, eye, style.extent * size));
             Trajectory::drawing(scene, duration_s, *style, &mut rng)
         }
         MotionSpec::Free(free) => {

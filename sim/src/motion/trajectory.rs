@@ -84,6 +84,15 @@ pub struct DrawStyle {
     pub tilt: (f64, f64),
     /// Peak pen-up speed range, m/s.
     pub pen_up_speed: (f64, f64),
+    /// Probability per stroke that the pen leans sideways and away from the cameras (LEDs dim, LED 1 hidden
+    /// behind the object near its silhouette).
+    pub away_lean_prob: f64,
+    /// Radius of the planning disc as a fraction of the object size.
+    pub extent: f64,
+    /// Rotation (radians, about the world up axis) of the direction along which the network is projected onto
+    /// the object, away from the cameras' viewing direction: a non-zero value puts the network on a side of the
+    /// object that the cameras see obliquely or not at all (object occlusion).
+    pub view_yaw: f64,
 }
 
 /// Free (non-drawing) motion: random waypoints.
@@ -139,7 +148,13 @@ impl Trajectory {
                 roll_amp: rng.range(0.0, 0.3) * (length / 0.2).min(1.0),
                 roll_phase: rng.range(0.0, 2.0 * PI),
                 smooth_ds: (0.02 / length.max(0.01)).min(0.15),
-                lean_ref: choose_lean(&scene, &strokes[idx].curve),
+                lean_ref: if rng.chance(style.away_lean_prob) {
+                    let e = (scene.eye - scene.origin).normalize();
+                    let side = if rng.chance(0.5) { scene.e1 } else { -scene.e1 };
+                    (side - e * 0.6 + scene.up * 0.3).normalize()
+                } else {
+                    choose_lean(&scene, &strokes[idx].curve)
+                },
             };
             params.roll0 -= params.roll_amp * params.roll_phase.sin();
             prev_roll = params.roll0 + params.roll_amp * (2.0 * PI + params.roll_phase).sin();
