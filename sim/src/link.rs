@@ -252,7 +252,9 @@ pub fn transmit(
     let mut last_delivery = 0.0f64;
     let mut flush = wire.first().map_or(0.0, |w| w.0);
     while i < wire.len() {
-        flush += rng.range(cfg.flush_interval_s.0, cfg.flush_interval_s.1);
+        flush += rng
+            .range(cfg.flush_interval_s.0, cfg.flush_interval_s.1)
+            .max(1e-5);
         if wire[i].0 > flush {
             continue;
         }
