@@ -88,11 +88,17 @@ pub fn run_scenario(
     out_dir: &Path,
     opts: SimOptions,
 ) -> Result<SimSummary, SimError> {
-    if !(duration_s.is_finite() && duration_s > 0.0 && duration_s <= 24.0 * 3600.0) {
-        return Err(SimError::BadDuration(duration_s));
-    }
+    check_duration(duration_s)?;
     let sc = scenario(name, seed, duration_s, opts.object)?;
     run(&sc, seed, duration_s, out_dir, opts)
+}
+
+fn check_duration(duration_s: f64) -> Result<(), SimError> {
+    if duration_s.is_finite() && duration_s > 0.0 && duration_s <= 24.0 * 3600.0 {
+        Ok(())
+    } else {
+        Err(SimError::BadDuration(duration_s))
+    }
 }
 
 fn pose_truth(sc: &Scenario, p: &Pose) -> PoseTruth {
@@ -185,6 +191,7 @@ pub fn run(
     out_dir: &Path,
     opts: SimOptions,
 ) -> Result<SimSummary, SimError> {
+    check_duration(duration_s)?;
     let traj = build_trajectory(sc, seed, duration_s);
     let meta = Meta::new(
         Source {
