@@ -1,0 +1,96 @@
+//! 8-bit grey images stored as binary PGM (`P5`, maxval 255), the simplest format any language can write.
+
+use crate::error::RecordError;
+use std::path::Path;
+
+/// An 8-bit grey image, row-major, no padding.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct GrayImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width * height` bytes, row after row.
+    pub data: Vec<u8>,
+}
+
+impl GrayImage {
+    /// A black image.
+    pub fn new(width: u32, height: u32) -> Self {
+        GrayImage {
+            width,
+            height,
+            data: vec![0; width as usize * height as usize],
+        }
+    }
+
+    /// The PGM encoding: header `P5\n{w} {h}\n255\n` then the pixels.
+    pub fn to_pgm(&self) -> Vec<u8> {
+        let header = format!("P5\n{} {}\n255\n", self.width, self.height);
+        let mut out = Vec::with_capacity(header.len() + self.data.len());
+        out.extend_from_slice(header.as_bytes());
+        out.extend_from_slice(&self.data);
+        out
+    }
+
+    /// Parses a binary PGM (`P5`, maxval 255; comments allowed in the header). `path` names the source in errors.
+    pub fn from_pgm(bytes: &[u8], path: &Path) -> Result<Self, RecordError> {
+        let bad = |reason: &str| RecordError::BadImage {
+            path: path.to_path_buf(),
+            reason: reason.to_string(),
+        };
+        let mut pos = 0usize;
+        let mut fields = [0u64; 3];
+        if bytes.get(0..2) != Some(b"P5") {
+            return Err(bad("missing P5 magic"));
+        }
+        pos += 2;
+        for field in fields.iter_mut() {
+            // Skip whitespace and comments.
+            loop {
+                match bytes.get(pos) {
+                    Some(b) if b.is_ascii_whitespace() => pos += 1,
+                    Some(b'#') => {
+                        while bytes.get(pos).is_some_and(|&b| b != b'\n') {
+                            pos += 1;
+                        }
+                    }
+                    Some(_) => break,
+                    None => return Err(bad("header ends early")),
+                }
+            }
+            let start = pos;
+            while bytes.get(pos).is_some_and(u8::is_ascii_digit) {
+                pos += 1;
+            }
+            if start == pos || pos - start > 9 {
+                return Err(bad("header field is not a number"));
+            }
+            let text = std::str::from_utf8(&bytes[start..pos]).map_err(|_| bad("header"))?;
+            *field = text
+                .parse()
+                .map_err(|_| bad("header field is not a number"))?;
+        }
+        if !bytes.get(pos).is_some_and(u8::is_ascii_whitespace) {
+            return Err(bad("no whitespace after maxval"));
+        }
+        pos += 1;
+        let [w, h, maxval] = fields;
+        if maxval != 255 {
+            return Err(bad("maxval must be 255 (8-bit)"));
+        }
+        let n = w.checked_mul(h).ok_or_else(|| bad("size overflows"))?;
+        let data = &bytes[pos..];
+        if data.len() as u64 != n {
+            return Err(RecordError::BadImage {
+                path: path.to_path_buf(),
+                reason: format!("expected {n} pixel bytes, found {}", data.len()),
+            });
+        }
+        Ok(GrayImage {
+            width: u32::try_from(w).map_err(|_| bad("width too large"))?,
+            height: u32::try_from(h).map_err(|_| bad("height too large"))?,
+            data: data.to_vec(),
+        })
+    }
+}
