@@ -27,6 +27,8 @@ enum Command {
     Decode(cli::decode::DecodeArgs),
     /// Benchmark the sparse solvers of the geometry core (JSON line of median timings).
     Bench(cli::bench::BenchArgs),
+    /// Simulate a pen session (pen, IMU, link, cameras) into a recording with ground truth.
+    Sim(cli::sim::SimArgs),
 }
 
 fn main() -> ExitCode {
@@ -34,6 +36,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Decode(args) => cli::decode::run(args),
         Command::Bench(args) => cli::bench::run(args),
+        Command::Sim(args) => cli::sim::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -2,3 +2,4 @@
 
 pub mod bench;
 pub mod decode;
+pub mod sim;
