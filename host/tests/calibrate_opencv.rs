@@ -172,15 +172,17 @@ fn recovers_a_known_distorted_stereo_rig() {
             )
         })
         .collect();
-    if let Ok(dir) = std::env::var("FIRES_DUMP_VIEWS") {
-        for (k, (l, r)) in images.iter().enumerate() {
-            for (name, img) in [("left", l), ("right", r)] {
-                let mut pgm = format!("P5\n{W} {H}\n255\n").into_bytes();
-                pgm.extend_from_slice(img);
-                std::fs::write(format!("{dir}/{name}_{k}.pgm"), pgm).expect("dump");
-            }
+    let dir = std::env::temp_dir().join(format!("fires-calib-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    for (k, (l, r)) in images.iter().enumerate() {
+        for (name, img) in [("left", l), ("right", r)] {
+            let mut pgm = format!("P5\n{W} {H}\n255\n").into_bytes();
+            pgm.extend_from_slice(img);
+            std::fs::write(dir.join(format!("{name}_{k}.pgm")), pgm).expect("write view");
         }
     }
+    check_cli(&dir, &t_lr);
+    let _ = std::fs::remove_dir_all(&dir);
     let views: Vec<(GrayView<'_>, GrayView<'_>)> = images
         .iter()
         .map(|(l, r)| {
@@ -240,6 +242,39 @@ fn recovers_a_known_distorted_stereo_rig() {
     assert!(angle < 0.2, "rotation error {angle} deg");
     assert!(cal.stereo_rms_px < 0.3, "stereo rms {}", cal.stereo_rms_px);
     println!("{cal:?}");
+}
+
+/// `fires calibrate` on the same views as image files writes a rig that recordings can read.
+fn check_cli(dir: &std::path::Path, t_lr: &V3) {
+    let out_json = dir.join("rig.json");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_fires"))
+        .args([
+            "calibrate",
+            "--board",
+            "9x6",
+            "--square-mm",
+            "25",
+            "--images",
+        ])
+        .arg(dir)
+        .arg("--out")
+        .arg(&out_json)
+        .output()
+        .expect("run fires");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
+    assert_eq!(report["views"], 8);
+    let rig: fires_record::RigCalibration =
+        serde_json::from_str(&std::fs::read_to_string(&out_json).expect("rig.json"))
+            .expect("rig parses");
+    assert_eq!(rig.cameras.len(), 2);
+    let t = rig.cameras[1].extrinsics.translation_m;
+    let dt: f64 = (0..3).map(|i| (t[i] - t_lr[i]).powi(2)).sum::<f64>().sqrt();
+    assert!(dt < 0.0015, "baseline error {dt} m");
 }
 
 #[test]

@@ -110,6 +110,48 @@ pub struct StereoCalibration {
     pub views: usize,
 }
 
+impl CameraCalibration {
+    /// The camera model recordings use (`meta.json`).
+    pub fn to_model(&self) -> fires_record::CameraModel {
+        let [k1, k2, p1, p2, k3] = self.distortion;
+        fires_record::CameraModel {
+            width: self.width,
+            height: self.height,
+            fx: self.fx,
+            fy: self.fy,
+            cx: self.cx,
+            cy: self.cy,
+            k1,
+            k2,
+            p1,
+            p2,
+            k3,
+        }
+    }
+}
+
+impl StereoCalibration {
+    /// The rig as recordings store it: camera 0 (left) defines the world frame.
+    pub fn to_rig(&self) -> fires_record::RigCalibration {
+        use fires_record::{CalibratedCamera, Extrinsics};
+        fires_record::RigCalibration {
+            cameras: vec![
+                CalibratedCamera {
+                    intrinsics: self.left.to_model(),
+                    extrinsics: Extrinsics::IDENTITY,
+                },
+                CalibratedCamera {
+                    intrinsics: self.right.to_model(),
+                    extrinsics: Extrinsics {
+                        rotation: self.rotation,
+                        translation_m: self.translation_m,
+                    },
+                },
+            ],
+        }
+    }
+}
+
 /// An 8-bit grey image borrowed as rows of `width` bytes.
 #[derive(Clone, Copy, Debug)]
 pub struct GrayView<'a> {

@@ -1,5 +1,6 @@
 //! The `fires` subcommands, one module each.
 
 pub mod bench;
+pub mod calibrate;
 pub mod decode;
 pub mod sim;
