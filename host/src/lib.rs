@@ -2,3 +2,5 @@
 //! (architecture.md §1). The `fires` binary (src/main.rs) is a thin command-line layer over it.
 
 pub mod link;
+pub mod stereo;
+pub mod track;
