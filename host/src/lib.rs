@@ -4,3 +4,4 @@
 pub mod link;
 pub mod stereo;
 pub mod track;
+pub mod vision;
