@@ -1,6 +1,7 @@
 //! Pen tracking after blob detection: LED identification (thesis §4.1.2), tip estimation
 //! (eqs. 4.11-4.13), sensor fusion (§4.1.4) and the per-frame [`pipeline::Tracker`].
 
+pub mod fusion;
 pub mod identify;
 pub mod pen;
 

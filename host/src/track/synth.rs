@@ -125,3 +125,109 @@ pub fn project_leds(
     }
     out
 }
+
+/// A smooth hand-like pen motion: the pen wobbles (sinusoids on three Euler angles) around a base
+/// orientation while LED 1 moves on a small Lissajous curve. Used to generate IMU and camera data.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PenMotion {
+    /// Centre of the LED 1 trajectory, world frame.
+    pub center: Vector3<f64>,
+    /// Amplitude of the LED 1 trajectory, metres.
+    pub radius: f64,
+    /// Base orientation (world from pen).
+    pub base: UnitQuaternion<f64>,
+    /// Wobble amplitudes (yaw, pitch, roll), radians.
+    pub amplitude: [f64; 3],
+    /// Wobble frequencies (yaw, pitch, roll), Hz.
+    pub frequency: [f64; 3],
+}
+
+impl PenMotion {
+    /// A typical drawing motion 0.8 m in front of the rig, pen pointing down-forward.
+    pub fn drawing() -> Self {
+        let dir = Vector3::new(0.35, 0.8, 0.45).normalize();
+        let base = UnitQuaternion::rotation_between(&Vector3::x(), &dir)
+            .unwrap_or_else(UnitQuaternion::identity);
+        Self {
+            center: Vector3::new(0.0, -0.05, 0.8),
+            radius: 0.06,
+            base,
+            amplitude: [0.5, 0.35, 0.8],
+            frequency: [0.31, 0.47, 0.23],
+        }
+    }
+
+    /// Pose at time `t` seconds.
+    pub fn pose(&self, t: f64) -> PenPose {
+        let w = |k: usize, phase: f64| {
+            self.amplitude[k] * (std::f64::consts::TAU * self.frequency[k] * t + phase).sin()
+        };
+        let wobble = UnitQuaternion::from_euler_angles(w(2, 0.3), w(1, 1.1), w(0, 0.0));
+        let s = std::f64::consts::TAU * 0.4 * t;
+        let led1 = self.center
+            + Vector3::new(s.sin(), 0.5 * (1.3 * s).cos(), 0.3 * (0.7 * s).sin()) * self.radius;
+        PenPose {
+            led1,
+            rotation: self.base * wobble,
+        }
+    }
+
+    /// Angular velocity in the pen frame at `t` (central difference), rad/s.
+    pub fn angular_velocity(&self, t: f64) -> Vector3<f64> {
+        let h = 1e-4;
+        (self.pose(t - h).rotation.inverse() * self.pose(t + h).rotation).scaled_axis() / (2.0 * h)
+    }
+
+    /// Acceleration of LED 1 in the world frame at `t` (central difference), m/s^2.
+    pub fn acceleration(&self, t: f64) -> Vector3<f64> {
+        let h = 1e-3;
+        (self.pose(t + h).led1 - 2.0 * self.pose(t).led1 + self.pose(t - h).led1) / (h * h)
+    }
+}
+
+/// IMU error model for synthetic samples.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImuNoise {
+    /// Gyro white noise per sample, rad/s.
+    pub gyro_sigma: f64,
+    /// Constant gyro bias, rad/s.
+    pub gyro_bias: Vector3<f64>,
+    /// Accelerometer white noise per sample, m/s^2.
+    pub accel_sigma: f64,
+    /// Magnetometer white noise per sample, as a fraction of the field.
+    pub mag_sigma: f64,
+}
+
+impl Default for ImuNoise {
+    fn default() -> Self {
+        Self {
+            gyro_sigma: 0.01,
+            gyro_bias: Vector3::new(0.02, -0.015, 0.01),
+            accel_sigma: 0.08,
+            mag_sigma: 0.02,
+        }
+    }
+}
+
+/// A synthetic IMU sample of `motion` at time `t_ns`.
+pub fn imu_sample(
+    motion: &PenMotion,
+    t_ns: u64,
+    world: &crate::track::fusion::WorldReference,
+    noise: &ImuNoise,
+    rng: &mut SplitMix64,
+) -> crate::track::fusion::ImuSample {
+    let t = t_ns as f64 * 1e-9;
+    let q = motion.pose(t).rotation;
+    let mut n3 = |s: f64| Vector3::new(rng.gaussian(), rng.gaussian(), rng.gaussian()) * s;
+    let gyro = motion.angular_velocity(t) + noise.gyro_bias + n3(noise.gyro_sigma);
+    let specific = motion.acceleration(t) + world.up() * world.gravity;
+    let accel = q.inverse() * specific + n3(noise.accel_sigma);
+    let mag = q.inverse() * world.magnetic() + n3(noise.mag_sigma);
+    crate::track::fusion::ImuSample {
+        t_ns,
+        accel: accel.into(),
+        gyro: gyro.into(),
+        mag: mag.into(),
+    }
+}
