@@ -4,6 +4,7 @@
 pub mod fusion;
 pub mod identify;
 pub mod pen;
+pub mod pipeline;
 
 pub mod synth;
 pub mod tip;

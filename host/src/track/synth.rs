@@ -143,13 +143,14 @@ pub struct PenMotion {
 }
 
 impl PenMotion {
-    /// A typical drawing motion 0.8 m in front of the rig, pen pointing down-forward.
+    /// A typical drawing motion 0.8 m in front of a 0.25 m-baseline rig (centred between the
+    /// cameras), pen pointing down-forward.
     pub fn drawing() -> Self {
         let dir = Vector3::new(0.35, 0.8, 0.45).normalize();
         let base = UnitQuaternion::rotation_between(&Vector3::x(), &dir)
             .unwrap_or_else(UnitQuaternion::identity);
         Self {
-            center: Vector3::new(0.0, -0.05, 0.8),
+            center: Vector3::new(0.125, -0.05, 0.8),
             radius: 0.06,
             base,
             amplitude: [0.5, 0.35, 0.8],
