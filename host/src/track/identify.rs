@@ -32,10 +32,70 @@ pub struct IdentifyConfig {
     pub cross_ratio_tolerance: f64,
     /// A labelling agrees with the prior direction when the cosine of the angle exceeds this.
     pub prior_min_cos: f64,
+    /// Expected error of the direction prior (fused direction), radians.
+    pub prior_sigma: f64,
     /// A labelling agrees with the previous frame when every LED moved less than this, metres.
     pub continuity_max_jump: f64,
     /// Candidates beyond this count are ignored (bounds the search).
     pub max_candidates: usize,
+    /// A labelling is refused (or needs the direction prior, if only its mirror image fits) when
+    /// another labelling of the same points fits within this many standard deviations of the
+    /// rig's [`RangeNoise`].
+    pub ambiguity_sigmas: f64,
+    /// Two-LED labellings are refused when a labelled blob pairs with another blob with an
+    /// epipolar distance smaller by more than this, pixels.
+    pub competitor_margin_px: f64,
+}
+
+/// Expected triangulation noise of the rig, used to judge whether a measured distance is
+/// unambiguous: depth noise `σ_z = k_depth Z^2` (from disparity, `k_depth = √2 σ_px / (f B)`) and
+/// lateral noise `σ_xy = k_lateral Z` (`k_lateral = σ_px / f`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RangeNoise {
+    /// Depth noise per square metre of depth.
+    pub k_depth: f64,
+    /// Lateral noise per metre of depth.
+    pub k_lateral: f64,
+}
+
+impl RangeNoise {
+    /// The noise model of a rig with centroid noise `pixel_sigma` (pixels).
+    pub fn from_rig(rig: &crate::stereo::StereoRig, pixel_sigma: f64) -> Self {
+        let f = 0.5 * (rig.left.focal_px() + rig.right.focal_px());
+        // Disparity noise is the difference of two centroid errors: sqrt(2) σ_px.
+        let k_depth = std::f64::consts::SQRT_2 * pixel_sigma / (f * rig.baseline().max(1e-6));
+        Self {
+            k_depth,
+            k_lateral: pixel_sigma / f,
+        }
+    }
+
+    /// Standard deviation (radians) of the direction from `p` to `q`.
+    pub fn direction_sigma(&self, p: &Vector3<f64>, q: &Vector3<f64>) -> f64 {
+        let d = (q - p).norm();
+        let Some(u) = (q - p).try_normalize(1e-12) else {
+            return std::f64::consts::PI;
+        };
+        let var = |x: &Vector3<f64>| {
+            let z = x.norm();
+            let c = x.try_normalize(1e-12).map_or(0.0, |r| u.dot(&r).powi(2));
+            (self.k_depth * z * z).powi(2) * (1.0 - c) + (self.k_lateral * z).powi(2) * (1.0 + c)
+        };
+        (var(p) + var(q)).sqrt() / d
+    }
+
+    /// Standard deviation of the distance between two triangulated points (left camera at origin).
+    pub fn distance_sigma(&self, p: &Vector3<f64>, q: &Vector3<f64>) -> f64 {
+        let Some(u) = (q - p).try_normalize(1e-12) else {
+            return 0.0;
+        };
+        let var = |x: &Vector3<f64>| {
+            let z = x.norm();
+            let c = x.try_normalize(1e-12).map_or(1.0, |r| u.dot(&r).powi(2));
+            (self.k_depth * z * z).powi(2) * c + (self.k_lateral * z).powi(2) * (1.0 - c)
+        };
+        (var(p) + var(q)).sqrt()
+    }
 }
 
 impl Default for IdentifyConfig {
@@ -45,8 +105,11 @@ impl Default for IdentifyConfig {
             max_line_residual: 0.004,
             cross_ratio_tolerance: 0.05,
             prior_min_cos: 0.9,
+            prior_sigma: 0.035,
             continuity_max_jump: 0.03,
             max_candidates: 24,
+            ambiguity_sigmas: 4.0,
+            competitor_margin_px: 1.0,
         }
     }
 }
@@ -120,6 +183,11 @@ struct Hypothesis {
     assignment: [Option<usize>; LED_COUNT],
     size: usize,
     distance_rms: f64,
+    /// The mirrored labelling of the same points is also consistent within the noise.
+    needs_prior: bool,
+    /// Consistent, but another same-direction labelling of its points fits the noise as well:
+    /// never accepted, yet it still counts as a competitor of conflicting labellings.
+    refused: bool,
 }
 
 /// LED identifier with its precomputed pen distances (reusable, no per-frame allocation after warm-up).
@@ -128,6 +196,7 @@ pub struct Identifier {
     pen: PenGeometry,
     config: IdentifyConfig,
     cross_ratio: f64,
+    noise: Option<RangeNoise>,
     hypotheses: Vec<Hypothesis>,
 }
 
@@ -139,8 +208,15 @@ impl Identifier {
             pen,
             config,
             cross_ratio: pen.cross_ratio(),
+            noise: None,
             hypotheses: Vec::with_capacity(64),
         })
+    }
+
+    /// Enables the range-dependent ambiguity check for two-LED labellings.
+    pub fn with_noise(mut self, noise: RangeNoise) -> Self {
+        self.noise = Some(noise);
+        self
     }
 
     /// The configuration in use.
@@ -159,13 +235,24 @@ impl Identifier {
             return Err(IdentifyError::TooFewCandidates);
         }
         self.collect_hypotheses(cands);
+        if let Some(dir) = prior.direction {
+            // Labellings pointing against the fused direction are never accepted.
+            self.hypotheses.retain(|h| {
+                labelled_direction(&labelled_points(cands, &h.assignment))
+                    .is_some_and(|v| v.dot(&dir) > 0.0)
+            });
+        }
         let best_size = self
             .hypotheses
             .iter()
+            .filter(|h| !h.refused)
             .map(|h| h.size)
             .max()
             .ok_or(IdentifyError::NoConsistentSet)?;
         let (chosen, resolution) = self.choose(cands, best_size, prior)?;
+        if self.has_conflicting_rival(cands, &chosen, prior) {
+            return Err(IdentifyError::Ambiguous);
+        }
         Ok(self.finish(cands, chosen, resolution))
     }
 
@@ -178,7 +265,9 @@ impl Identifier {
                 }
                 let d = (cands[i].point - cands[j].point).norm();
                 for (a, b) in PenGeometry::pairs() {
-                    if (d - self.pen.distance(a, b)).abs() > self.config.tolerance {
+                    if (d - self.pen.distance(a, b)).abs()
+                        > self.band(&cands[i].point, &cands[j].point)
+                    {
                         continue;
                     }
                     for (x, y) in [(i, j), (j, i)] {
@@ -211,7 +300,7 @@ impl Identifier {
         assignment[b] = Some(ib);
         for c in (0..LED_COUNT).filter(|&c| c != a && c != b) {
             let predicted = pa + per_metre * (l[c] - l[a]);
-            let gate = self.config.tolerance * (1.0 + 2.0 * ((l[c] - l[a]) / (l[b] - l[a])).abs());
+            let gate = self.band(&pa, &pb) * (1.0 + 2.0 * ((l[c] - l[a]) / (l[b] - l[a])).abs());
             let mut best: Option<(usize, f64)> = None;
             for (k, cand) in cands.iter().enumerate() {
                 if assignment
@@ -250,8 +339,8 @@ impl Identifier {
     ) -> bool {
         assignment.iter().enumerate().all(|(o, idx)| match idx {
             Some(u) => {
-                ((cands[*u].point - cands[k].point).norm() - self.pen.distance(o, c)).abs()
-                    <= self.config.tolerance
+                let (p, q) = (&cands[*u].point, &cands[k].point);
+                ((p - q).norm() - self.pen.distance(o, c)).abs() <= self.band(p, q)
             }
             None => true,
         })
@@ -268,13 +357,17 @@ impl Identifier {
         for (a, b) in PenGeometry::pairs() {
             if let (Some(p), Some(q)) = (pts[a], pts[b]) {
                 let e = (p - q).norm() - self.pen.distance(a, b);
-                if e.abs() > self.config.tolerance {
+                if e.abs() > self.band(&p, &q) {
                     return None;
                 }
                 sum += e * e;
                 n += 1;
             }
         }
+        if size == 2 && self.has_better_pairing(cands, &assignment) {
+            return None;
+        }
+        let (shifted, mirrored) = self.plausible_alternatives(&pts);
         if size >= 3 && line_residual(&pts) > self.config.max_line_residual {
             return None;
         }
@@ -282,10 +375,79 @@ impl Identifier {
             return None;
         }
         Some(Hypothesis {
+            needs_prior: mirrored,
+            refused: shifted,
             assignment,
             size,
             distance_rms: (sum / n.max(1) as f64).sqrt(),
         })
+    }
+
+    /// Ghost-pairing check for two-LED labellings: true when a blob of a labelled candidate pairs
+    /// with another blob noticeably better (epipolar distance smaller by `competitor_margin_px`).
+    /// With collinear LEDs, wrong left/right pairings form a shifted "ghost pen" whose distances
+    /// can match by chance; a better alternative pairing of the same blob exposes it.
+    fn has_better_pairing(
+        &self,
+        cands: &[Candidate],
+        assignment: &[Option<usize>; LED_COUNT],
+    ) -> bool {
+        assignment.iter().flatten().any(|&k| {
+            let member = &cands[k];
+            cands.iter().enumerate().any(|(j, alt)| {
+                j != k
+                    && shares_blob(member, alt)
+                    && alt.epipolar_px + self.config.competitor_margin_px < member.epipolar_px
+            })
+        })
+    }
+
+    /// Other labellings of the same ordered points that fit the physical distances within the
+    /// noise band (`max(tolerance, ambiguity_sigmas * σ_d)` per pair, σ_d from [`RangeNoise`]):
+    /// returns (a same-direction alternative exists, a mirrored alternative exists). A
+    /// same-direction alternative (e.g. LEDs {1,2} vs {2,3} read off one noisy pair, or {1,2,3}
+    /// vs {2,3,4}) cannot be told apart by any prior, so such labellings are refused.
+    fn plausible_alternatives(&self, pts: &[Option<Vector3<f64>>; LED_COUNT]) -> (bool, bool) {
+        let labelled: Vec<(usize, Vector3<f64>)> = pts
+            .iter()
+            .enumerate()
+            .filter_map(|(i, p)| p.map(|p| (i, p)))
+            .collect();
+        let k = labelled.len();
+        let l = &self.pen.led_offsets;
+        let (mut shifted, mut mirrored) = (false, false);
+        for subset in 0u8..16 {
+            if subset.count_ones() as usize != k {
+                continue;
+            }
+            let labels: Vec<usize> = (0..LED_COUNT).filter(|i| subset & (1 << i) != 0).collect();
+            for reversed in [false, true] {
+                let alt = |j: usize| {
+                    if reversed {
+                        labels[k - 1 - j]
+                    } else {
+                        labels[j]
+                    }
+                };
+                if !reversed && (0..k).all(|j| alt(j) == labelled[j].0) {
+                    continue;
+                }
+                let fits = (0..k).all(|a| {
+                    (a + 1..k).all(|b| {
+                        let (p, q) = (labelled[a].1, labelled[b].1);
+                        ((p - q).norm() - (l[alt(a)] - l[alt(b)]).abs()).abs() <= self.band(&p, &q)
+                    })
+                });
+                if fits {
+                    if reversed {
+                        mirrored = true;
+                    } else {
+                        shifted = true;
+                    }
+                }
+            }
+        }
+        (shifted, mirrored)
     }
 
     fn cross_ratio_ok(&self, pts: &[Option<Vector3<f64>>; LED_COUNT]) -> bool {
@@ -311,16 +473,32 @@ impl Identifier {
         size: usize,
         prior: &IdentifyPrior,
     ) -> Result<(Hypothesis, Resolution), IdentifyError> {
-        let mut top = self.hypotheses.iter().filter(|h| h.size == size);
+        let mut top = self
+            .hypotheses
+            .iter()
+            .filter(|h| h.size == size && !h.refused);
         let first = *top.next().ok_or(IdentifyError::NoConsistentSet)?;
         if top.next().is_none() {
-            return Ok((first, Resolution::Geometry));
+            if !first.needs_prior {
+                return Ok((first, Resolution::Geometry));
+            }
+            let resolved =
+                prior.direction.is_some() && self.agrees_with_prior(cands, &first, prior);
+            return if resolved {
+                Ok((first, Resolution::Prior))
+            } else {
+                Err(IdentifyError::Ambiguous)
+            };
         }
         if prior.direction.is_none() && prior.previous.iter().all(Option::is_none) {
             return Err(IdentifyError::Ambiguous);
         }
         let mut survivor = None;
-        for h in self.hypotheses.iter().filter(|h| h.size == size) {
+        for h in self
+            .hypotheses
+            .iter()
+            .filter(|h| h.size == size && !h.refused)
+        {
             if self.agrees_with_prior(cands, h, prior) {
                 if survivor.is_some() {
                     return Err(IdentifyError::Ambiguous);
@@ -331,6 +509,51 @@ impl Identifier {
         survivor
             .map(|h| (h, Resolution::Prior))
             .ok_or(IdentifyError::Ambiguous)
+    }
+
+    /// Distance-matching band for two points: `max(tolerance, ambiguity_sigmas * σ_d)`; it grows
+    /// with range when the rig noise is known, so that far-range labellings that are only
+    /// consistent "by luck" meet their rivals and are refused rather than accepted wrongly.
+    fn band(&self, p: &Vector3<f64>, q: &Vector3<f64>) -> f64 {
+        let noisy = self.noise.map_or(0.0, |n| {
+            self.config.ambiguity_sigmas * n.distance_sigma(p, q)
+        });
+        noisy.max(self.config.tolerance)
+    }
+
+    /// Cosine threshold for agreeing with the direction prior: `prior_min_cos`, tightened with the
+    /// rig noise to `3 σ_angle + prior_sigma` of the labelled end points (at least 3 degrees).
+    fn prior_cos(&self, pts: &[Option<Vector3<f64>>; LED_COUNT]) -> f64 {
+        let Some(noise) = self.noise else {
+            return self.config.prior_min_cos;
+        };
+        let (Some(p), Some(q)) = (
+            pts.iter().flatten().next(),
+            pts.iter().rev().flatten().next(),
+        ) else {
+            return self.config.prior_min_cos;
+        };
+        let limit =
+            (3.0 * noise.direction_sigma(p, q) + self.config.prior_sigma).max(3f64.to_radians());
+        limit.cos().max(self.config.prior_min_cos)
+    }
+
+    /// True when another labelling at least as large, not excluded by the priors, uses one of the
+    /// chosen blobs in a different pairing or gives a chosen candidate a different label
+    /// (including labellings refused as ambiguous): the frame is then not labelled with confidence.
+    fn has_conflicting_rival(
+        &self,
+        cands: &[Candidate],
+        chosen: &Hypothesis,
+        prior: &IdentifyPrior,
+    ) -> bool {
+        let has_prior = prior.direction.is_some() || prior.previous.iter().any(Option::is_some);
+        self.hypotheses.iter().any(|h| {
+            h.assignment != chosen.assignment
+                && h.size >= chosen.size
+                && conflicts(cands, chosen, h)
+                && (!has_prior || self.agrees_with_prior(cands, h, prior))
+        })
     }
 
     fn agrees_with_prior(
@@ -344,7 +567,7 @@ impl Identifier {
             let Some(v) = labelled_direction(&pts) else {
                 return false;
             };
-            if v.dot(&dir) < self.config.prior_min_cos * dir.norm() {
+            if v.dot(&dir) < self.prior_cos(&pts) * dir.norm() {
                 return false;
             }
         }
@@ -382,6 +605,18 @@ impl Identifier {
             interference,
         }
     }
+}
+
+/// Two labellings conflict when they give a candidate different labels or pair a blob differently.
+fn conflicts(cands: &[Candidate], a: &Hypothesis, b: &Hypothesis) -> bool {
+    a.assignment.iter().enumerate().any(|(la, ka)| {
+        let Some(ka) = ka else { return false };
+        b.assignment.iter().enumerate().any(|(lb, kb)| match kb {
+            Some(kb) if kb == ka => la != lb,
+            Some(kb) => shares_blob(&cands[*ka], &cands[*kb]),
+            None => false,
+        })
+    })
 }
 
 fn shares_blob(a: &Candidate, b: &Candidate) -> bool {

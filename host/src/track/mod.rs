@@ -6,6 +6,8 @@ pub mod identify;
 pub mod pen;
 pub mod pipeline;
 
+#[cfg(test)]
+mod stress_tests;
 pub mod synth;
 pub mod tip;
 
