@@ -6,7 +6,7 @@
 
 use super::rig::StereoRig;
 use super::triangulate::{Triangulated, Triangulator};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 /// Gates for candidate pairs.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -21,16 +21,20 @@ pub struct CorrespondenceConfig {
     pub max_depth: f64,
     /// At most this many blobs per camera are considered (the brightest first is the caller's job).
     pub max_blobs_per_camera: usize,
+    /// Blob-centroid noise in pixels; when positive each candidate gets a 3D covariance by
+    /// propagating it through the triangulation (numerical Jacobian, 4 extra solves).
+    pub pixel_sigma: f64,
 }
 
 impl Default for CorrespondenceConfig {
     fn default() -> Self {
         Self {
-            max_epipolar_px: 4.0,
+            max_epipolar_px: 3.0,
             max_ray_gap: 0.008,
             min_depth: 0.1,
             max_depth: 5.0,
             max_blobs_per_camera: 8,
+            pixel_sigma: 0.5,
         }
     }
 }
@@ -48,9 +52,23 @@ pub struct Candidate {
     pub ray_gap: f64,
     /// Epipolar distance, pixels.
     pub epipolar_px: f64,
+    /// Covariance of `point` from the blob noise (zero when not computed), m^2.
+    pub covariance: Matrix3<f64>,
 }
 
 impl Candidate {
+    /// A candidate at a known point with no measurement details (tests, synthetic input).
+    pub fn at(left: usize, right: usize, point: Vector3<f64>) -> Self {
+        Self {
+            left,
+            right,
+            point,
+            ray_gap: 0.0,
+            epipolar_px: 0.0,
+            covariance: Matrix3::zeros(),
+        }
+    }
+
     fn new(left: usize, right: usize, t: &Triangulated, epipolar_px: f64) -> Self {
         Self {
             left,
@@ -58,8 +76,36 @@ impl Candidate {
             point: t.point,
             ray_gap: t.ray_gap,
             epipolar_px,
+            covariance: Matrix3::zeros(),
         }
     }
+}
+
+/// Covariance of the triangulated point for isotropic image noise `sigma` (normalised units,
+/// left and right), by finite differences of the triangulation.
+fn covariance(
+    tr: &Triangulator,
+    ml: [f64; 2],
+    mr: [f64; 2],
+    p: &Vector3<f64>,
+    sigma: [f64; 2],
+) -> Matrix3<f64> {
+    let h = 1e-7;
+    let mut cov = Matrix3::zeros();
+    for k in 0..4 {
+        let (mut l, mut r) = (ml, mr);
+        if k < 2 {
+            l[k] += h;
+        } else {
+            r[k - 2] += h;
+        }
+        let Ok(t) = tr.triangulate(l, r) else {
+            continue;
+        };
+        let col = (t.point - p) / h * sigma[k / 2];
+        cov += col * col.transpose();
+    }
+    cov
 }
 
 /// Reusable candidate list (no allocation per frame after warm-up).
@@ -97,7 +143,15 @@ impl Correspondences {
                 {
                     continue;
                 }
-                self.candidates.push(Candidate::new(i, j, &t, epi));
+                let mut cand = Candidate::new(i, j, &t, epi);
+                if config.pixel_sigma > 0.0 {
+                    let sigma = [
+                        config.pixel_sigma / rig.left.focal_px(),
+                        config.pixel_sigma / rig.right.focal_px(),
+                    ];
+                    cand.covariance = covariance(triangulator, *ml, *mr, &t.point, sigma);
+                }
+                self.candidates.push(cand);
             }
         }
         &self.candidates

@@ -23,11 +23,14 @@ use thiserror::Error;
 /// Identification tolerances.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct IdentifyConfig {
-    /// Maximum mismatch between a measured and a physical distance, metres (< half the smallest
-    /// gap between two physical distances).
+    /// Maximum mismatch between a measured and a physical distance when no noise information is
+    /// available, metres (< half the smallest gap between two physical distances); with candidate
+    /// covariances or a rig noise model the band is `max(tolerance_floor, k σ_d)` instead.
     pub tolerance: f64,
-    /// Maximum distance of an LED from the least-squares axis, metres (3 or more LEDs).
+    /// Maximum distance of an LED from the least-squares axis without noise information, metres.
     pub max_line_residual: f64,
+    /// Smallest collinearity limit when covariances are known, metres.
+    pub max_line_residual_floor: f64,
     /// Maximum relative deviation of the 4-LED cross-ratio from the pen's.
     pub cross_ratio_tolerance: f64,
     /// A labelling agrees with the prior direction when the cosine of the angle exceeds this.
@@ -42,6 +45,17 @@ pub struct IdentifyConfig {
     /// another labelling of the same points fits within this many standard deviations of the
     /// rig's [`RangeNoise`].
     pub ambiguity_sigmas: f64,
+    /// A labelling is accepted only if every distance is within this many standard deviations
+    /// (rivals are searched with the wider `ambiguity_sigmas`).
+    pub accept_sigmas: f64,
+    /// Smallest distance band when the noise is known, metres (model and calibration errors).
+    pub tolerance_floor: f64,
+    /// Image-evidence check: an unused blob within this distance of the predicted pen line
+    /// (pixels) must be near a predicted LED.
+    pub image_line_px: f64,
+    /// Image-evidence check: radius around a predicted LED at the labelled LEDs (pixels); it grows
+    /// with the extrapolation distance.
+    pub image_match_px: f64,
     /// Two-LED labellings are refused when a labelled blob pairs with another blob with an
     /// epipolar distance smaller by more than this, pixels.
     pub competitor_margin_px: f64,
@@ -103,6 +117,7 @@ impl Default for IdentifyConfig {
         Self {
             tolerance: 0.0045,
             max_line_residual: 0.004,
+            max_line_residual_floor: 0.0015,
             cross_ratio_tolerance: 0.05,
             prior_min_cos: 0.9,
             prior_sigma: 0.035,
@@ -110,6 +125,10 @@ impl Default for IdentifyConfig {
             max_candidates: 24,
             ambiguity_sigmas: 4.0,
             competitor_margin_px: 1.0,
+            image_line_px: 2.5,
+            accept_sigmas: 3.0,
+            tolerance_floor: 0.0015,
+            image_match_px: 3.0,
         }
     }
 }
@@ -176,6 +195,17 @@ pub enum IdentifyError {
     /// Several labellings fit and the priors cannot decide between them.
     #[error("ambiguous labelling")]
     Ambiguous,
+    /// An unexplained blob lies on the labelled pen's image line away from every predicted LED.
+    #[error("labelling contradicted by an image blob")]
+    ContradictedByImage,
+}
+
+/// Rig terms for projecting predicted LEDs into normalised image coordinates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ImageGeometry {
+    r: nalgebra::Matrix3<f64>,
+    t: Vector3<f64>,
+    focal: [f64; 2],
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -185,8 +215,9 @@ struct Hypothesis {
     distance_rms: f64,
     /// The mirrored labelling of the same points is also consistent within the noise.
     needs_prior: bool,
-    /// Consistent, but another same-direction labelling of its points fits the noise as well:
-    /// never accepted, yet it still counts as a competitor of conflicting labellings.
+    /// Consistent within the wide (ambiguity) band but either not within the acceptance band or
+    /// another same-direction labelling of its points fits as well: never accepted, yet it still
+    /// counts as a rival of conflicting labellings.
     refused: bool,
 }
 
@@ -197,6 +228,7 @@ pub struct Identifier {
     config: IdentifyConfig,
     cross_ratio: f64,
     noise: Option<RangeNoise>,
+    geometry: Option<ImageGeometry>,
     hypotheses: Vec<Hypothesis>,
 }
 
@@ -209,6 +241,7 @@ impl Identifier {
             config,
             cross_ratio: pen.cross_ratio(),
             noise: None,
+            geometry: None,
             hypotheses: Vec::with_capacity(64),
         })
     }
@@ -217,6 +250,119 @@ impl Identifier {
     pub fn with_noise(mut self, noise: RangeNoise) -> Self {
         self.noise = Some(noise);
         self
+    }
+
+    /// Enables the range-dependent checks and the image-evidence check of
+    /// [`Self::identify_with_images`] for this rig with centroid noise `pixel_sigma` (pixels).
+    pub fn with_rig(mut self, rig: &crate::stereo::StereoRig, pixel_sigma: f64) -> Self {
+        self.noise = Some(RangeNoise::from_rig(rig, pixel_sigma));
+        self.geometry = Some(ImageGeometry {
+            r: rig.r_right_from_left,
+            t: rig.t_right_from_left,
+            focal: [rig.left.focal_px(), rig.right.focal_px()],
+        });
+        self
+    }
+
+    /// As [`Self::identify`], then checks the labelling against all blobs of both images
+    /// (undistorted normalised coordinates, indexed as in the candidates): the labelled pen predicts
+    /// where all four LEDs project; an unused blob lying on the predicted pen segment but away from
+    /// every predicted LED contradicts the labelling. This exposes "ghost pens" made of wrong
+    /// left/right pairings of collinear LEDs (which share epipolar lines when the pen is parallel
+    /// to the baseline).
+    pub fn identify_with_images(
+        &mut self,
+        candidates: &[Candidate],
+        prior: &IdentifyPrior,
+        left: &[[f64; 2]],
+        right: &[[f64; 2]],
+    ) -> Result<Identification, IdentifyError> {
+        let id = self.identify(candidates, prior)?;
+        if self.image_consistent(candidates, &id, [left, right]) {
+            Ok(id)
+        } else {
+            Err(IdentifyError::ContradictedByImage)
+        }
+    }
+
+    fn image_consistent(
+        &self,
+        cands: &[Candidate],
+        id: &Identification,
+        blobs: [&[[f64; 2]]; 2],
+    ) -> bool {
+        let Some(g) = &self.geometry else { return true };
+        let l = &self.pen.led_offsets;
+        let n = id.count() as f64;
+        let Some(centroid) = id
+            .points
+            .iter()
+            .flatten()
+            .copied()
+            .reduce(|a, b| a + b)
+            .map(|s| s / n)
+        else {
+            return true;
+        };
+        let Some(v) = super::tip::principal_axis(&id.points, &centroid) else {
+            return true;
+        };
+        let v = if labelled_direction(&id.points).is_some_and(|d| d.dot(&v) < 0.0) {
+            -v
+        } else {
+            v
+        };
+        let labels = || (0..LED_COUNT).filter(|&i| id.assignment[i].is_some());
+        let c_h = labels().map(|i| l[i]).sum::<f64>() / n;
+        let spread = labels().map(|i| l[i]).fold(f64::NEG_INFINITY, f64::max)
+            - labels().map(|i| l[i]).fold(f64::INFINITY, f64::min);
+        let predicted: [Vector3<f64>; LED_COUNT] =
+            std::array::from_fn(|i| centroid + v * (c_h - l[i]));
+        for (cam, blob_list) in blobs.iter().enumerate() {
+            let used = |b: usize| {
+                id.assignment.iter().flatten().any(|&k| {
+                    if cam == 0 {
+                        cands[k].left == b
+                    } else {
+                        cands[k].right == b
+                    }
+                })
+            };
+            let proj: Option<Vec<[f64; 2]>> = predicted
+                .iter()
+                .map(|p| {
+                    let q = if cam == 0 { *p } else { g.r * p + g.t };
+                    (q.z > 1e-6).then(|| [q.x / q.z, q.y / q.z])
+                })
+                .collect();
+            let Some(m) = proj else { continue };
+            let f = g.focal[cam];
+            let d = [m[3][0] - m[0][0], m[3][1] - m[0][1]];
+            let len = d[0].hypot(d[1]);
+            if len * f < 3.0 {
+                continue;
+            }
+            for (b, blob) in blob_list.iter().enumerate() {
+                if used(b) || !blob.iter().all(|v| v.is_finite()) {
+                    continue;
+                }
+                let rel = [blob[0] - m[0][0], blob[1] - m[0][1]];
+                let along = (rel[0] * d[0] + rel[1] * d[1]) / (len * len);
+                let perp_px = (rel[0] * d[1] - rel[1] * d[0]).abs() / len * f;
+                if perp_px > self.config.image_line_px || !(-0.6..=1.6).contains(&along) {
+                    continue;
+                }
+                let near_led = (0..LED_COUNT).any(|i| {
+                    let radius =
+                        self.config.image_match_px * (1.0 + (l[i] - c_h).abs() / spread.max(1e-6));
+                    (blob[0] - m[i][0]).hypot(blob[1] - m[i][1]) * f <= radius
+                });
+                if !near_led {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// The configuration in use.
@@ -236,11 +382,21 @@ impl Identifier {
         }
         self.collect_hypotheses(cands);
         if let Some(dir) = prior.direction {
-            // Labellings pointing against the fused direction are never accepted.
-            self.hypotheses.retain(|h| {
-                labelled_direction(&labelled_points(cands, &h.assignment))
-                    .is_some_and(|v| v.dot(&dir) > 0.0)
-            });
+            // Labellings that disagree with the fused direction (beyond its noise and theirs)
+            // are never accepted: this removes mirrored labellings and most ghost pens.
+            let keep: Vec<bool> = self
+                .hypotheses
+                .iter()
+                .map(|h| {
+                    let v = labelled_direction(&labelled_points(cands, &h.assignment));
+                    v.is_some_and(|v| {
+                        v.dot(&dir) >= self.prior_cos(cands, &h.assignment) * dir.norm()
+                    })
+                })
+                .collect();
+            let mut it = keep.iter();
+            self.hypotheses
+                .retain(|_| it.next().copied().unwrap_or(false));
         }
         let best_size = self
             .hypotheses
@@ -265,9 +421,7 @@ impl Identifier {
                 }
                 let d = (cands[i].point - cands[j].point).norm();
                 for (a, b) in PenGeometry::pairs() {
-                    if (d - self.pen.distance(a, b)).abs()
-                        > self.band(&cands[i].point, &cands[j].point)
-                    {
+                    if (d - self.pen.distance(a, b)).abs() > self.band(&cands[i], &cands[j]) {
                         continue;
                     }
                     for (x, y) in [(i, j), (j, i)] {
@@ -300,7 +454,8 @@ impl Identifier {
         assignment[b] = Some(ib);
         for c in (0..LED_COUNT).filter(|&c| c != a && c != b) {
             let predicted = pa + per_metre * (l[c] - l[a]);
-            let gate = self.band(&pa, &pb) * (1.0 + 2.0 * ((l[c] - l[a]) / (l[b] - l[a])).abs());
+            let gate = self.band(&cands[ia], &cands[ib])
+                * (1.0 + 2.0 * ((l[c] - l[a]) / (l[b] - l[a])).abs());
             let mut best: Option<(usize, f64)> = None;
             for (k, cand) in cands.iter().enumerate() {
                 if assignment
@@ -339,8 +494,8 @@ impl Identifier {
     ) -> bool {
         assignment.iter().enumerate().all(|(o, idx)| match idx {
             Some(u) => {
-                let (p, q) = (&cands[*u].point, &cands[k].point);
-                ((p - q).norm() - self.pen.distance(o, c)).abs() <= self.band(p, q)
+                let (p, q) = (&cands[*u], &cands[k]);
+                ((p.point - q.point).norm() - self.pen.distance(o, c)).abs() <= self.band(p, q)
             }
             None => true,
         })
@@ -353,13 +508,14 @@ impl Identifier {
     ) -> Option<Hypothesis> {
         let pts = labelled_points(cands, &assignment);
         let size = pts.iter().flatten().count();
-        let (mut sum, mut n) = (0.0, 0usize);
+        let (mut sum, mut n, mut tight) = (0.0, 0usize, true);
         for (a, b) in PenGeometry::pairs() {
-            if let (Some(p), Some(q)) = (pts[a], pts[b]) {
-                let e = (p - q).norm() - self.pen.distance(a, b);
-                if e.abs() > self.band(&p, &q) {
+            if let (Some(ka), Some(kb)) = (assignment[a], assignment[b]) {
+                let e = (cands[ka].point - cands[kb].point).norm() - self.pen.distance(a, b);
+                if e.abs() > self.band(&cands[ka], &cands[kb]) {
                     return None;
                 }
+                tight &= e.abs() <= self.band_at(&cands[ka], &cands[kb], self.config.accept_sigmas);
                 sum += e * e;
                 n += 1;
             }
@@ -367,8 +523,8 @@ impl Identifier {
         if size == 2 && self.has_better_pairing(cands, &assignment) {
             return None;
         }
-        let (shifted, mirrored) = self.plausible_alternatives(&pts);
-        if size >= 3 && line_residual(&pts) > self.config.max_line_residual {
+        let (shifted, mirrored) = self.plausible_alternatives(cands, &assignment);
+        if size >= 3 && !self.collinear(cands, &assignment) {
             return None;
         }
         if size == 4 && !self.cross_ratio_ok(&pts) {
@@ -376,7 +532,7 @@ impl Identifier {
         }
         Some(Hypothesis {
             needs_prior: mirrored,
-            refused: shifted,
+            refused: shifted || !tight,
             assignment,
             size,
             distance_rms: (sum / n.max(1) as f64).sqrt(),
@@ -407,11 +563,15 @@ impl Identifier {
     /// returns (a same-direction alternative exists, a mirrored alternative exists). A
     /// same-direction alternative (e.g. LEDs {1,2} vs {2,3} read off one noisy pair, or {1,2,3}
     /// vs {2,3,4}) cannot be told apart by any prior, so such labellings are refused.
-    fn plausible_alternatives(&self, pts: &[Option<Vector3<f64>>; LED_COUNT]) -> (bool, bool) {
-        let labelled: Vec<(usize, Vector3<f64>)> = pts
+    fn plausible_alternatives(
+        &self,
+        cands: &[Candidate],
+        assignment: &[Option<usize>; LED_COUNT],
+    ) -> (bool, bool) {
+        let labelled: Vec<(usize, &Candidate)> = assignment
             .iter()
             .enumerate()
-            .filter_map(|(i, p)| p.map(|p| (i, p)))
+            .filter_map(|(i, k)| k.map(|k| (i, &cands[k])))
             .collect();
         let k = labelled.len();
         let l = &self.pen.led_offsets;
@@ -435,7 +595,8 @@ impl Identifier {
                 let fits = (0..k).all(|a| {
                     (a + 1..k).all(|b| {
                         let (p, q) = (labelled[a].1, labelled[b].1);
-                        ((p - q).norm() - (l[alt(a)] - l[alt(b)]).abs()).abs() <= self.band(&p, &q)
+                        ((p.point - q.point).norm() - (l[alt(a)] - l[alt(b)]).abs()).abs()
+                            <= self.band(p, q)
                     })
                 });
                 if fits {
@@ -511,30 +672,86 @@ impl Identifier {
             .ok_or(IdentifyError::Ambiguous)
     }
 
+    /// Collinearity: every labelled point within `max(max_line_residual_floor, ambiguity_sigmas σ⊥)`
+    /// of the least-squares line, σ⊥ from the candidate's covariance perpendicular to the line
+    /// (`max_line_residual` when no covariance is known).
+    fn collinear(&self, cands: &[Candidate], assignment: &[Option<usize>; LED_COUNT]) -> bool {
+        let pts = labelled_points(cands, assignment);
+        let n = pts.iter().flatten().count() as f64;
+        let centroid = pts.iter().flatten().sum::<Vector3<f64>>() / n;
+        let Some(axis) = super::tip::principal_axis(&pts, &centroid) else {
+            return false;
+        };
+        assignment.iter().flatten().all(|&k| {
+            let c = &cands[k];
+            let d = c.point - centroid;
+            let residual = (d - axis * d.dot(&axis)).norm();
+            let perp_var = c.covariance.trace() - axis.dot(&(c.covariance * axis));
+            let limit = if c.covariance.trace() > 0.0 {
+                (self.config.ambiguity_sigmas * perp_var.max(0.0).sqrt())
+                    .max(self.config.max_line_residual_floor)
+            } else {
+                self.config.max_line_residual
+            };
+            residual <= limit
+        })
+    }
+
     /// Distance-matching band for two points: `max(tolerance, ambiguity_sigmas * σ_d)`; it grows
     /// with range when the rig noise is known, so that far-range labellings that are only
     /// consistent "by luck" meet their rivals and are refused rather than accepted wrongly.
-    fn band(&self, p: &Vector3<f64>, q: &Vector3<f64>) -> f64 {
-        let noisy = self.noise.map_or(0.0, |n| {
-            self.config.ambiguity_sigmas * n.distance_sigma(p, q)
-        });
-        noisy.max(self.config.tolerance)
+    fn band(&self, a: &Candidate, b: &Candidate) -> f64 {
+        self.band_at(a, b, self.config.ambiguity_sigmas)
+    }
+
+    /// `max(floor, sigmas * σ_d)`; the floor is `tolerance` without any noise information and
+    /// `tolerance_floor` with it.
+    fn band_at(&self, a: &Candidate, b: &Candidate, sigmas: f64) -> f64 {
+        let sigma = self.distance_sigma(a, b);
+        if sigma > 0.0 {
+            (sigmas * sigma).max(self.config.tolerance_floor)
+        } else {
+            self.config.tolerance
+        }
+    }
+
+    /// Standard deviation of the distance between two candidates: from their propagated
+    /// covariances when available, else from the rig's [`RangeNoise`] model (0 without either).
+    fn distance_sigma(&self, a: &Candidate, b: &Candidate) -> f64 {
+        let cov = a.covariance + b.covariance;
+        match ((b.point - a.point).try_normalize(1e-12), cov.trace() > 0.0) {
+            (Some(u), true) => (u.dot(&(cov * u))).max(0.0).sqrt(),
+            _ => self
+                .noise
+                .map_or(0.0, |n| n.distance_sigma(&a.point, &b.point)),
+        }
+    }
+
+    /// Standard deviation (radians) of the direction between two candidates.
+    fn direction_sigma(&self, a: &Candidate, b: &Candidate) -> Option<f64> {
+        let cov = a.covariance + b.covariance;
+        let d = b.point - a.point;
+        let u = d.try_normalize(1e-12)?;
+        if cov.trace() > 0.0 {
+            let perp = cov.trace() - u.dot(&(cov * u));
+            return Some((0.5 * perp.max(0.0)).sqrt() / d.norm());
+        }
+        self.noise.map(|n| n.direction_sigma(&a.point, &b.point))
     }
 
     /// Cosine threshold for agreeing with the direction prior: `prior_min_cos`, tightened with the
     /// rig noise to `3 σ_angle + prior_sigma` of the labelled end points (at least 3 degrees).
-    fn prior_cos(&self, pts: &[Option<Vector3<f64>>; LED_COUNT]) -> f64 {
-        let Some(noise) = self.noise else {
-            return self.config.prior_min_cos;
-        };
+    fn prior_cos(&self, cands: &[Candidate], assignment: &[Option<usize>; LED_COUNT]) -> f64 {
         let (Some(p), Some(q)) = (
-            pts.iter().flatten().next(),
-            pts.iter().rev().flatten().next(),
+            assignment.iter().flatten().next(),
+            assignment.iter().rev().flatten().next(),
         ) else {
             return self.config.prior_min_cos;
         };
-        let limit =
-            (3.0 * noise.direction_sigma(p, q) + self.config.prior_sigma).max(3f64.to_radians());
+        let Some(sigma) = self.direction_sigma(&cands[*p], &cands[*q]) else {
+            return self.config.prior_min_cos;
+        };
+        let limit = (3.0 * sigma + self.config.prior_sigma).max(3f64.to_radians());
         limit.cos().max(self.config.prior_min_cos)
     }
 
@@ -567,7 +784,7 @@ impl Identifier {
             let Some(v) = labelled_direction(&pts) else {
                 return false;
             };
-            if v.dot(&dir) < self.prior_cos(&pts) * dir.norm() {
+            if v.dot(&dir) < self.prior_cos(cands, &h.assignment) * dir.norm() {
                 return false;
             }
         }
@@ -665,13 +882,7 @@ mod tests {
         points
             .iter()
             .enumerate()
-            .map(|(i, p)| Candidate {
-                left: i,
-                right: i,
-                point: *p,
-                ray_gap: 0.0,
-                epipolar_px: 0.0,
-            })
+            .map(|(i, p)| Candidate::at(i, i, *p))
             .collect()
     }
 

