@@ -88,16 +88,24 @@ fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
-/// A clamped cubic B-spline on `[0, 1]`.
+/// A clamped cubic B-spline on `[0, 1]` (built by [`BSpline::fit`], so always >= 4 control points).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BSpline {
-    /// Knot vector (length = control points + 4).
-    pub knots: Vec<f64>,
-    /// Control points.
-    pub control: Vec<Vector3<f64>>,
+    knots: Vec<f64>,
+    control: Vec<Vector3<f64>>,
 }
 
 impl BSpline {
+    /// Knot vector (length = control points + 4).
+    pub fn knots(&self) -> &[f64] {
+        &self.knots
+    }
+
+    /// Control points.
+    pub fn control_points(&self) -> &[Vector3<f64>] {
+        &self.control
+    }
+
     /// Clamped cubic knot vector for `n >= 4` control points with uniform interior knots.
     fn clamped_knots(n: usize) -> Vec<f64> {
         let spans = (n - 3) as f64;

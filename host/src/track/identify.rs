@@ -416,7 +416,7 @@ impl Identifier {
         self.hypotheses.clear();
         for i in 0..cands.len() {
             for j in i + 1..cands.len() {
-                if shares_blob(&cands[i], &cands[j]) {
+                if shares_blob(&cands[i], &cands[j]) || !finite(&cands[i]) || !finite(&cands[j]) {
                     continue;
                 }
                 let d = (cands[i].point - cands[j].point).norm();
@@ -458,10 +458,11 @@ impl Identifier {
                 * (1.0 + 2.0 * ((l[c] - l[a]) / (l[b] - l[a])).abs());
             let mut best: Option<(usize, f64)> = None;
             for (k, cand) in cands.iter().enumerate() {
-                if assignment
-                    .iter()
-                    .flatten()
-                    .any(|&u| u == k || shares_blob(&cands[u], cand))
+                if !finite(cand)
+                    || assignment
+                        .iter()
+                        .flatten()
+                        .any(|&u| u == k || shares_blob(&cands[u], cand))
                 {
                     continue;
                 }
@@ -836,6 +837,13 @@ fn conflicts(cands: &[Candidate], a: &Hypothesis, b: &Hypothesis) -> bool {
     })
 }
 
+fn finite(c: &Candidate) -> bool {
+    c.point
+        .iter()
+        .chain(c.covariance.iter())
+        .all(|v| v.is_finite())
+}
+
 fn shares_blob(a: &Candidate, b: &Candidate) -> bool {
     a.left == b.left || a.right == b.right
 }
@@ -984,6 +992,22 @@ mod tests {
         };
         let r = id.identify(&c, &prior).unwrap();
         assert_eq!(wrong_labels(&r, &truth), 0);
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+        /// Random pens, visibility patterns and spurious points: never a wrong label.
+        #[test]
+        fn random_pens_and_spurious_points_never_get_wrong_labels(seed in 0u64..u64::MAX, mask in 3u8..16, spurious in 0usize..4) {
+            proptest::prop_assume!(mask.count_ones() >= 2);
+            let mut rng = SplitMix64::new(seed);
+            let mut id = Identifier::new(PenGeometry::thesis(), IdentifyConfig::default()).unwrap();
+            let (c, truth, pose) = scene(&mut rng, mask, spurious, 0.0007);
+            let prior = IdentifyPrior { direction: Some(pose.direction()), ..Default::default() };
+            if let Ok(r) = id.identify(&c, &prior) {
+                proptest::prop_assert_eq!(wrong_labels(&r, &truth), 0);
+            }
+        }
     }
 
     #[test]

@@ -108,6 +108,17 @@ pub struct CameraFrame {
     pub blobs: Vec<[f64; 2]>,
 }
 
+impl CameraFrame {
+    /// A frame from detected blobs (their sub-pixel centres, in the detector's order).
+    pub fn from_blobs(camera: CameraId, t_ns: u64, blobs: &[crate::vision::Blob]) -> Self {
+        Self {
+            camera,
+            t_ns,
+            blobs: blobs.iter().map(|b| [b.x, b.y]).collect(),
+        }
+    }
+}
+
 /// How a sample's tip was obtained.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum TrackQuality {
@@ -636,6 +647,74 @@ mod tests {
             meds[0] < meds[3],
             "default fusion should beat the thesis model"
         );
+    }
+
+    #[test]
+    fn predicted_window_covers_the_next_blobs() {
+        let rig = StereoRig::parallel(1024, 768, 45f64.to_radians(), 0.25);
+        let pen = PenGeometry::thesis();
+        let mut tracker = Tracker::new(rig.clone(), TrackerConfig::default()).unwrap();
+        let mut rng = SplitMix64::new(8);
+        let motion = PenMotion::drawing();
+        let frame = |t: u64, cam: CameraId, rng: &mut SplitMix64| {
+            let proj = project_leds(&rig, &pen, &motion.pose(t as f64 * 1e-9), 0.0, rng);
+            let c = usize::from(cam == CameraId::Right);
+            CameraFrame {
+                camera: cam,
+                t_ns: t,
+                blobs: proj[c].iter().flatten().copied().collect(),
+            }
+        };
+        assert!(tracker.predicted_window(CameraId::Left, 0, 20.0).is_none());
+        tracker.push_frame(frame(1_000_000, CameraId::Left, &mut rng));
+        let s = tracker
+            .push_frame(frame(1_000_000, CameraId::Right, &mut rng))
+            .unwrap();
+        assert!(matches!(s.quality, TrackQuality::Vision { leds: 4 }));
+        let next = frame(17_000_000, CameraId::Left, &mut rng);
+        let w = tracker
+            .predicted_window(CameraId::Left, 17_000_000, 20.0)
+            .unwrap();
+        for b in &next.blobs {
+            assert!(
+                b[0] >= w.x as f64
+                    && b[0] < (w.x + w.width) as f64
+                    && b[1] >= w.y as f64
+                    && b[1] < (w.y + w.height) as f64
+            );
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn arbitrary_input_never_panics_or_yields_nan(
+            frames in proptest::collection::vec(
+                (proptest::bool::ANY, 0u64..2_000_000_000, proptest::collection::vec((-1e4f64..1e4, -1e4f64..1e4), 0..10)),
+                0..40,
+            ),
+            imu in proptest::collection::vec((0u64..2_000_000_000, -1e3f64..1e3, -50f64..50.0), 0..40),
+        ) {
+            let rig = StereoRig::parallel(640, 480, 1.0, 0.2);
+            let mut tracker = Tracker::new(rig, TrackerConfig::default()).unwrap();
+            let mut outputs = Vec::new();
+            for (k, (left, t, blobs)) in frames.into_iter().enumerate() {
+                let camera = if left { CameraId::Left } else { CameraId::Right };
+                let mut blobs: Vec<[f64; 2]> = blobs.into_iter().map(|(x, y)| [x, y]).collect();
+                if k % 7 == 3 {
+                    blobs.push([f64::NAN, 1.0]);
+                }
+                outputs.extend(tracker.push_frame(CameraFrame { camera, t_ns: t, blobs }));
+                if let Some(&(ti, a, g)) = imu.get(k) {
+                    let s = ImuSample { t_ns: ti, accel: [a, 9.8, -a], gyro: [g, -g, 0.1], mag: [30.0, a, 5.0] };
+                    outputs.extend(tracker.push_imu(&s));
+                }
+            }
+            for o in outputs {
+                let finite = |v: Option<[f64; 3]>| v.is_none_or(|v| v.iter().all(|x| x.is_finite()));
+                proptest::prop_assert!(finite(o.tip) && finite(o.direction));
+                proptest::prop_assert!(o.leds.iter().all(|p| finite(*p)));
+            }
+        }
     }
 
     #[test]

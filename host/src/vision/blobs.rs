@@ -664,6 +664,25 @@ mod tests {
         );
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        #[test]
+        fn arbitrary_images_and_windows_never_panic(
+            w in 1usize..80, h in 1usize..60, seed in 0u64..1000,
+            wx in 0usize..100, wy in 0usize..100, ww in 0usize..100, wh in 0usize..100,
+        ) {
+            let mut rng = SplitMix64::new(seed);
+            let img: Vec<u8> = (0..w * h).map(|_| (rng.next_u64() % 256) as u8).collect();
+            let image = GrayImage::new(w, h, &img).unwrap();
+            let mut det = BlobDetector::new(BlobConfig { threshold: 128, ..Default::default() });
+            let blobs = det.detect(&image, Some(Rect { x: wx, y: wy, width: ww, height: wh }));
+            for b in blobs {
+                proptest::prop_assert!(b.x.is_finite() && b.y.is_finite());
+                proptest::prop_assert!(b.x >= 0.0 && b.x < w as f64 && b.y >= 0.0 && b.y < h as f64);
+            }
+        }
+    }
+
     #[test]
     fn rejects_short_buffers() {
         assert!(GrayImage::new(10, 10, &[0; 99]).is_err());

@@ -64,6 +64,9 @@ impl TipDeadReckoner {
 
     /// A vision tip at `t_ns` (updates position and velocity).
     pub fn observe(&mut self, t_ns: u64, tip: &Vector3<f64>) {
+        if !tip.iter().all(|v| v.is_finite()) {
+            return;
+        }
         match self.position {
             Some(p)
                 if t_ns > self.t_ns && t_ns - self.last_seen_ns < self.config.max_duration_ns =>
@@ -91,7 +94,7 @@ impl TipDeadReckoner {
         q: Option<&UnitQuaternion<f64>>,
     ) -> Option<Vector3<f64>> {
         let p = self.position?;
-        if sample.t_ns <= self.t_ns {
+        if sample.t_ns <= self.t_ns || !sample.accel.iter().all(|v| v.is_finite()) {
             return self.current(sample.t_ns);
         }
         if sample.t_ns - self.last_seen_ns > self.config.max_duration_ns {

@@ -165,6 +165,15 @@ impl OrientationFilter {
 
 impl DirectionFilter for OrientationFilter {
     fn imu(&mut self, s: &ImuSample) {
+        if !s
+            .accel
+            .iter()
+            .chain(&s.gyro)
+            .chain(&s.mag)
+            .all(|v| v.is_finite())
+        {
+            return;
+        }
         if !self.initialised {
             if let Some(q) = self
                 .world
@@ -198,7 +207,10 @@ impl DirectionFilter for OrientationFilter {
     }
 
     fn vision(&mut self, t_ns: u64, direction: &Vector3<f64>) {
-        let Some(v) = direction.try_normalize(1e-12) else {
+        let Some(v) = direction
+            .try_normalize(1e-12)
+            .filter(|v| v.iter().all(|x| x.is_finite()))
+        else {
             return;
         };
         if !self.initialised {
@@ -209,7 +221,8 @@ impl DirectionFilter for OrientationFilter {
         let e = Vector3::x().cross(&measured);
         let angle = e.norm().asin().min(std::f64::consts::FRAC_PI_2);
         let axis_err = if measured.x < 0.0 {
-            e.normalize() * (std::f64::consts::PI - angle)
+            // Beyond 90 degrees; exactly opposite has no defined axis: use any perpendicular.
+            e.try_normalize(1e-12).unwrap_or_else(Vector3::y) * (std::f64::consts::PI - angle)
         } else {
             e
         };
