@@ -37,8 +37,9 @@ pub enum FusionKind {
 pub trait DirectionFilter {
     /// Processes one IMU sample (time-ordered).
     fn imu(&mut self, sample: &ImuSample);
-    /// Processes a vision pen direction (unit, world frame, towards the tip) observed at `t_ns`.
-    fn vision(&mut self, t_ns: u64, direction: &Vector3<f64>);
+    /// Processes a vision pen direction (unit, world frame, towards the tip) observed at `t_ns`,
+    /// with its variance per perpendicular axis in rad^2 (`None`: the filter's configured value).
+    fn vision(&mut self, t_ns: u64, direction: &Vector3<f64>, variance: Option<f64>);
     /// Best estimate of the unit pen direction at `t_ns`, if initialised.
     fn direction_at(&self, t_ns: u64) -> Option<Vector3<f64>>;
     /// World-from-pen orientation at `t_ns` if the filter has one (the thesis filter has none).

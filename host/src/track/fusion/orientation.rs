@@ -31,8 +31,11 @@ pub struct OrientationConfig {
     pub k_mag: f64,
     /// Gyro bias integral gain, 1/s^2.
     pub k_bias: f64,
-    /// Fraction of the vision direction error removed per frame.
+    /// Fraction of the vision direction error removed per frame when its variance is not given.
     pub vision_gain: f64,
+    /// Growth of the axis variance between vision frames (gyro noise and bias error), rad^2/s;
+    /// with the vision variance it sets the vision gain (scalar Kalman filter).
+    pub axis_random_walk: f64,
     /// Vision bias gain (rad/s of bias per rad of error per frame).
     pub vision_bias_gain: f64,
     /// Relative deviation of `|a|` from `g` at which the gravity correction reaches zero.
@@ -53,6 +56,7 @@ impl Default for OrientationConfig {
             k_bias: 0.1,
             vision_gain: 0.15,
             vision_bias_gain: 0.02,
+            axis_random_walk: 2e-4,
             accel_gate: 0.2,
             startup_s: 1.0,
             history_ns: 250_000_000,
@@ -73,6 +77,8 @@ pub struct OrientationFilter {
     t_start: u64,
     initialised: bool,
     history: VecDeque<(u64, UnitQuaternion<f64>)>,
+    /// Variance of the pen-axis direction per perpendicular axis, rad^2.
+    p_var: f64,
 }
 
 impl OrientationFilter {
@@ -87,6 +93,7 @@ impl OrientationFilter {
             t_start: 0,
             initialised: false,
             history: VecDeque::with_capacity(256),
+            p_var: 1.0,
         }
     }
 
@@ -203,10 +210,11 @@ impl DirectionFilter for OrientationFilter {
         self.bias -= e * (self.config.k_bias * dt);
         let omega = Vector3::from(s.gyro) - self.bias + e;
         self.q *= UnitQuaternion::from_scaled_axis(omega * dt);
+        self.p_var = (self.p_var + self.config.axis_random_walk * dt).min(1.0);
         self.record(s.t_ns);
     }
 
-    fn vision(&mut self, t_ns: u64, direction: &Vector3<f64>) {
+    fn vision(&mut self, t_ns: u64, direction: &Vector3<f64>, variance: Option<f64>) {
         let Some(v) = direction
             .try_normalize(1e-12)
             .filter(|v| v.iter().all(|x| x.is_finite()))
@@ -226,7 +234,21 @@ impl DirectionFilter for OrientationFilter {
         } else {
             e
         };
-        let gain = (self.config.vision_gain * self.boost(t_ns)).min(0.8);
+        // Scalar Kalman gain on the axis error: the orientation variance grows with the gyro random
+        // walk between frames and shrinks with each vision update of known variance.
+        let gain = match variance.filter(|v| v.is_finite() && *v > 0.0) {
+            Some(r) => {
+                let p = if self.boost(t_ns) > 1.0 {
+                    self.p_var.max(1e-2)
+                } else {
+                    self.p_var
+                };
+                let k = p / (p + r);
+                self.p_var = (1.0 - k) * p;
+                k.min(0.8)
+            }
+            None => (self.config.vision_gain * self.boost(t_ns)).min(0.8),
+        };
         // Transport the correction from t_f to now: q_now = q_f * d  =>  use d⁻¹ e.
         let d = q_f.inverse() * self.q;
         let now = d.inverse() * axis_err;
@@ -295,7 +317,7 @@ mod tests {
             filter.imu(&imu_sample(&motion, t, &world, &noise, &mut rng));
             while pending.front().is_some_and(|(tf, _)| tf + latency_ns <= t) {
                 if let Some((tf, v)) = pending.pop_front() {
-                    filter.vision(tf, &v);
+                    filter.vision(tf, &v, Some(vision_sigma * vision_sigma));
                 }
             }
             if k > steps / 2 {
@@ -342,7 +364,7 @@ mod tests {
         let target = UnitQuaternion::from_euler_angles(0.0, 0.0, 0.3) * (q * Vector3::x());
         let before = f.direction_at(0).unwrap().angle(&target);
         for _ in 0..10 {
-            f.vision(0, &target);
+            f.vision(0, &target, None);
         }
         let after = f.direction_at(0).unwrap().angle(&target);
         assert!(after < 0.25 * before, "{before} -> {after}");

@@ -191,10 +191,16 @@ impl DirectionFilter for ThesisKalman {
         self.update(None, z);
     }
 
-    fn vision(&mut self, t_ns: u64, direction: &Vector3<f64>) {
+    fn vision(&mut self, t_ns: u64, direction: &Vector3<f64>, variance: Option<f64>) {
         self.advance_to(t_ns);
-        let z = self.angles(direction);
-        self.update(z, None);
+        let Some(z) = self.angles(direction) else {
+            return;
+        };
+        // The measured variance (when given) replaces R_v, so both filters see the same noise.
+        let r = variance
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .unwrap_or(self.config.r_vision);
+        self.update_pair(z, r);
     }
 
     fn direction_at(&self, t_ns: u64) -> Option<Vector3<f64>> {
