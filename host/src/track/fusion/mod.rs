@@ -5,6 +5,7 @@
 //!   estimation, gravity and magnetic-heading corrections at the IMU rate, and time-stamped
 //!   vision pen-direction corrections applied through a short state history.
 //! - [`dead_reckon`]: tip extrapolation through short occlusions, stopped after a time limit.
+//! - [`tip_filter`]: constant-velocity Kalman filter on the tip with the IMU acceleration as input.
 //!
 //! Frames: world = left camera frame; the pen (body) frame has +x along the axis towards the tip
 //! and is assumed to coincide with the IMU axes (a fixed mounting rotation can be applied with
@@ -15,11 +16,13 @@ pub mod dead_reckon;
 pub mod imu;
 pub mod orientation;
 pub mod thesis_kalman;
+pub mod tip_filter;
 
 pub use dead_reckon::{DeadReckonConfig, TipDeadReckoner};
 pub use imu::{ImuSample, ImuScale, WorldReference};
 pub use orientation::{OrientationConfig, OrientationFilter};
 pub use thesis_kalman::{ThesisKalman, ThesisKalmanConfig};
+pub use tip_filter::{TipFilter, TipFilterConfig};
 
 use nalgebra::Vector3;
 
