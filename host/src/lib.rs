@@ -4,3 +4,7 @@
 pub mod calibrate;
 pub mod clock;
 pub mod link;
+pub mod stereo;
+pub mod stroke;
+pub mod track;
+pub mod vision;

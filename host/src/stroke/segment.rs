@@ -1,0 +1,131 @@
+//! Stroke segmentation by the pen button (digest §8.11, decided here): a stroke starts when the
+//! drawing button is pressed and ends when it is released, both with the status packet's
+//! timestamp; tip samples inside `[press, release]` belong to the stroke. Samples without a tip
+//! (lost tracking) are skipped. A stroke with fewer than `min_points` points is discarded.
+
+/// A tip sample with its time.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TimedPoint {
+    /// Time, nanoseconds.
+    pub t_ns: u64,
+    /// Tip position, metres.
+    pub p: [f64; 3],
+}
+
+/// A finished stroke.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Stroke {
+    /// Button press time.
+    pub t_start_ns: u64,
+    /// Button release time.
+    pub t_end_ns: u64,
+    /// Raw tip samples in time order.
+    pub points: Vec<TimedPoint>,
+}
+
+/// What a button change did.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StrokeEvent {
+    /// A stroke began.
+    Started {
+        /// Press time.
+        t_ns: u64,
+    },
+    /// A stroke finished.
+    Ended(Stroke),
+    /// A stroke finished with too few points and was dropped.
+    Discarded {
+        /// Release time.
+        t_ns: u64,
+    },
+}
+
+/// Button-driven stroke builder.
+#[derive(Debug, Clone)]
+pub struct StrokeSegmenter {
+    /// Strokes with fewer points are discarded.
+    pub min_points: usize,
+    current: Option<Stroke>,
+}
+
+impl Default for StrokeSegmenter {
+    fn default() -> Self {
+        Self {
+            min_points: 2,
+            current: None,
+        }
+    }
+}
+
+impl StrokeSegmenter {
+    /// True while a stroke is open.
+    pub fn is_drawing(&self) -> bool {
+        self.current.is_some()
+    }
+
+    /// A button state (from a status packet) at `t_ns`; repeated states are ignored.
+    pub fn button(&mut self, t_ns: u64, pressed: bool) -> Option<StrokeEvent> {
+        match (pressed, self.current.take()) {
+            (true, None) => {
+                self.current = Some(Stroke {
+                    t_start_ns: t_ns,
+                    t_end_ns: t_ns,
+                    points: Vec::new(),
+                });
+                Some(StrokeEvent::Started { t_ns })
+            }
+            (true, Some(open)) => {
+                self.current = Some(open);
+                None
+            }
+            (false, Some(mut stroke)) => {
+                stroke.t_end_ns = t_ns;
+                stroke.points.retain(|p| p.t_ns <= t_ns);
+                if stroke.points.len() >= self.min_points {
+                    Some(StrokeEvent::Ended(stroke))
+                } else {
+                    Some(StrokeEvent::Discarded { t_ns })
+                }
+            }
+            (false, None) => None,
+        }
+    }
+
+    /// A tracker sample; kept if a stroke is open and the sample is not before its start.
+    pub fn tip(&mut self, t_ns: u64, tip: Option<[f64; 3]>) {
+        if let (Some(stroke), Some(p)) = (self.current.as_mut(), tip) {
+            let in_order = stroke.points.last().is_none_or(|l| l.t_ns < t_ns);
+            if t_ns >= stroke.t_start_ns && in_order && p.iter().all(|v| v.is_finite()) {
+                stroke.points.push(TimedPoint { t_ns, p });
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn press_and_release_delimit_strokes() {
+        let mut s = StrokeSegmenter::default();
+        s.tip(5, Some([0.0; 3]));
+        assert_eq!(s.button(10, true), Some(StrokeEvent::Started { t_ns: 10 }));
+        assert_eq!(s.button(12, true), None);
+        for t in [8, 11, 13, 15, 25] {
+            s.tip(t, Some([t as f64, 0.0, 0.0]));
+        }
+        s.tip(16, None);
+        let Some(StrokeEvent::Ended(stroke)) = s.button(20, false) else {
+            panic!("no stroke")
+        };
+        let times: Vec<u64> = stroke.points.iter().map(|p| p.t_ns).collect();
+        assert_eq!(times, vec![11, 13, 15]);
+        assert!(!s.is_drawing());
+        s.button(30, true);
+        assert_eq!(
+            s.button(31, false),
+            Some(StrokeEvent::Discarded { t_ns: 31 })
+        );
+    }
+}

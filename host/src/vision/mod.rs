@@ -1,0 +1,7 @@
+//! Image processing on the hot path: blob detection on 8-bit infrared frames (issue 5 item 1).
+
+pub mod blobs;
+
+pub use blobs::{
+    BackgroundModel, Blob, BlobConfig, BlobDetector, GrayImage, ImageError, Rect, SearchRegion,
+};
