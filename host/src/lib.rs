@@ -4,6 +4,7 @@
 pub mod calibrate;
 pub mod clock;
 pub mod link;
+pub mod replay;
 pub mod stereo;
 pub mod stroke;
 pub mod track;

@@ -23,6 +23,10 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Simulate a pen session and track it: the whole pipeline without hardware.
+    Demo(cli::demo::DemoArgs),
+    /// Track a recording: strokes.json, track.csv and report.json (accuracy when it has ground truth).
+    Replay(cli::replay::ReplayArgs),
     /// Decode raw pen link bytes into one JSON line per packet, then a summary line.
     Decode(cli::decode::DecodeArgs),
     /// Benchmark the sparse solvers of the geometry core (JSON line of median timings).
@@ -37,6 +41,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Decode(args) => cli::decode::run(args),
+        Command::Demo(args) => cli::demo::run(args),
+        Command::Replay(args) => cli::replay::run(args),
         Command::Bench(args) => cli::bench::run(args),
         Command::Sim(args) => cli::sim::run(args),
         Command::Calibrate(args) => cli::calibrate::run(args),

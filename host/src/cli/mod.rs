@@ -3,4 +3,6 @@
 pub mod bench;
 pub mod calibrate;
 pub mod decode;
+pub mod demo;
+pub mod replay;
 pub mod sim;

@@ -1,0 +1,167 @@
+//! `fires replay REC_DIR --out OUT_DIR`: a recording through the tracker; writes strokes.json, track.csv,
+//! report.json (with accuracy figures when the recording has ground truth).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use fires_host::replay::report::accuracy;
+use fires_host::replay::{replay, ReplayConfig, ReplayOutput};
+use fires_host::track::pipeline::TrackQuality;
+use fires_record::RecordingReader;
+
+/// Arguments of `fires replay`.
+#[derive(Debug, clap::Args)]
+pub struct ReplayArgs {
+    /// Recording directory (see docs/recording.md).
+    pub recording: PathBuf,
+    /// Output directory (created).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Sensor fusion: `orientation` (default: gyro/accel/mag orientation filter with vision corrections) or
+    /// `thesis` (the thesis's 4-state Kalman filter, eq. 4.18-4.21).
+    #[arg(long, default_value = "orientation")]
+    pub fusion: String,
+}
+
+/// Replays and writes the outputs; returns the report (used by `fires demo`).
+pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<serde_json::Value> {
+    let reader = RecordingReader::open(&args.recording)
+        .with_context(|| format!("cannot open recording {}", args.recording.display()))?;
+    let mut config = ReplayConfig::default();
+    config.tracker.fusion = match args.fusion.as_str() {
+        "orientation" => fires_host::track::fusion::FusionKind::Orientation,
+        "thesis" => fires_host::track::fusion::FusionKind::ThesisKalman,
+        other => anyhow::bail!("unknown fusion '{other}' (orientation, thesis)"),
+    };
+    let out = replay(&reader, &config)
+        .with_context(|| format!("replay of {}", args.recording.display()))?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    write_json(
+        &args.out.join("strokes.json"),
+        &serde_json::json!({ "strokes": out.strokes }),
+    )?;
+    write_track_csv(&args.out.join("track.csv"), &out)?;
+    let report = report(&reader, &out, &args.fusion)?;
+    write_json(&args.out.join("report.json"), &report)?;
+    Ok(report)
+}
+
+/// `fires replay`: prints the report as one JSON line.
+pub fn run(args: &ReplayArgs) -> anyhow::Result<()> {
+    let report = replay_to_dir(args)?;
+    println!("{report}");
+    Ok(())
+}
+
+fn report(
+    reader: &RecordingReader,
+    out: &ReplayOutput,
+    fusion: &str,
+) -> anyhow::Result<serde_json::Value> {
+    let tracked = out.samples.iter().filter(|s| s.tip.is_some()).count();
+    let vision = out
+        .samples
+        .iter()
+        .filter(|s| matches!(s.quality, TrackQuality::Vision { .. }))
+        .count();
+    let link = out.imu.stats;
+    let frames = out.samples.len().max(1) as f64;
+    let mut report = serde_json::json!({
+        "kind": "replay",
+        "recording": reader.dir(),
+        "fusion": fusion,
+        "frames": out.samples.len(),
+        "frames_tracked": tracked,
+        "frames_vision": vision,
+        "camera_frames": out.frames,
+        "strokes": out.strokes.len(),
+        "world_reference": out.world_reference,
+        "link": {
+            "bytes": out.imu.bytes,
+            "sensor_frames": link.sensor_frames,
+            "status_frames": link.status_frames,
+            "checksum_errors": link.checksum_errors,
+            "bytes_skipped": link.bytes_skipped,
+            "lost": link.lost,
+            "duplicates": link.duplicates,
+        },
+        "latency_us_per_frame": {
+            "blobs": out.times.blobs_ns as f64 / 1e3 / frames,
+            "track": out.times.track_ns as f64 / 1e3 / frames,
+        },
+        "stage_ms": {
+            "link": out.times.link_ns as f64 / 1e6,
+            "blobs": out.times.blobs_ns as f64 / 1e6,
+            "track": out.times.track_ns as f64 / 1e6,
+            "strokes": out.times.strokes_ns as f64 / 1e6,
+        },
+        "wall_ms": out.wall_ns as f64 / 1e6,
+    });
+    if let Some(truth) = reader.exposure_truth()? {
+        let mut left: Vec<_> = truth.into_iter().filter(|e| e.camera == 0).collect();
+        left.sort_by_key(|e| e.exposure_time_ns);
+        let acc = accuracy(out, &left);
+        let duration_s = match (left.first(), left.last()) {
+            (Some(a), Some(b)) => (b.exposure_time_ns - a.exposure_time_ns) as f64 / 1e9,
+            _ => 0.0,
+        };
+        if let Some(map) = report.as_object_mut() {
+            map.insert("accuracy".into(), serde_json::to_value(&acc)?);
+            for (k, v) in serde_json::to_value(&acc)?
+                .as_object()
+                .into_iter()
+                .flatten()
+            {
+                map.insert(k.clone(), v.clone());
+            }
+            map.insert(
+                "realtime_factor".into(),
+                (duration_s / (out.wall_ns as f64 / 1e9)).into(),
+            );
+        }
+    }
+    Ok(report)
+}
+
+fn write_json(path: &Path, value: &serde_json::Value) -> anyhow::Result<()> {
+    let text = serde_json::to_string_pretty(value)?;
+    std::fs::write(path, text + "\n").with_context(|| format!("cannot write {}", path.display()))
+}
+
+fn write_track_csv(path: &Path, out: &ReplayOutput) -> anyhow::Result<()> {
+    let file =
+        std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
+    let mut w = std::io::BufWriter::new(file);
+    writeln!(w, "t_ns,quality,leds,tip_x_m,tip_y_m,tip_z_m,dir_x,dir_y,dir_z,labels,confidence,interference")?;
+    for s in &out.samples {
+        let (q, n) = match s.quality {
+            TrackQuality::Vision { leds } => ("vision", leds),
+            TrackQuality::DeadReckoned => ("dead_reckoned", 0),
+            TrackQuality::Lost => ("lost", 0),
+        };
+        let v3 = |v: Option<[f64; 3]>| {
+            v.map_or(",,".to_string(), |p| {
+                format!("{:.6},{:.6},{:.6}", p[0], p[1], p[2])
+            })
+        };
+        let labels: String = s
+            .labels
+            .iter()
+            .map(|l| l.map_or("-".into(), |(a, b)| format!("{a}:{b}")))
+            .collect::<Vec<_>>()
+            .join(" ");
+        writeln!(
+            w,
+            "{},{q},{n},{},{},{labels},{:.3},{}",
+            s.t_ns,
+            v3(s.tip),
+            v3(s.direction),
+            s.confidence,
+            s.interference
+        )?;
+    }
+    w.flush()
+        .with_context(|| format!("cannot write {}", path.display()))
+}

@@ -1,0 +1,257 @@
+//! From the link's byte chunks to timed IMU samples and button changes.
+//!
+//! Sensor packets carry no timestamp, only an 8-bit counter; the pen samples at a fixed rate. Each packet's
+//! sample time is therefore `t_k = a + k·T` with `k` the unwrapped counter and `T` the nominal period. The
+//! counter is unwrapped with the arrival times (the `k` that is congruent to the counter modulo 256 and closest
+//! to the time-based guess), which survives outages longer than 256 packets. `a` is the lower envelope of
+//! `arrival_k − k·T` over the session: the radio only ever adds latency, so the earliest-arriving packet is the
+//! best anchor. A packet's arrival time is its chunk's host time minus the serial time of the bytes after it.
+//! Button changes come from status packets, timed at the sensor sample they name (`sensor_counter`).
+
+use fires_protocol::{Frame, StreamDecoder, FRAME_LEN};
+use fires_record::LinkChunk;
+
+use crate::track::fusion::{ImuSample, ImuScale};
+
+/// A pen button state change at a host time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ButtonChange {
+    /// Host time of the change, nanoseconds.
+    pub t_ns: u64,
+    /// Buttons pressed (bit i = button i+1).
+    pub buttons: u8,
+}
+
+/// Everything the link carried, timed on the host clock.
+#[derive(Debug, Clone, Default)]
+pub struct ImuStream {
+    /// IMU samples in SI units, in time order.
+    pub samples: Vec<ImuSample>,
+    /// Button states whenever they changed (the first status packet sets the initial state).
+    pub buttons: Vec<ButtonChange>,
+    /// The decoder's counters over the whole link.
+    pub stats: fires_protocol::DecoderStats,
+    /// Bytes on the link.
+    pub bytes: u64,
+}
+
+/// A decoded frame with its arrival time.
+struct Arrival {
+    frame: Frame,
+    arrival_ns: u64,
+}
+
+/// Decodes every chunk and times each frame by the serial position of its last byte within its chunk.
+fn decode_arrivals(
+    chunks: &[LinkChunk],
+    baud: u32,
+) -> (Vec<Arrival>, fires_protocol::DecoderStats, u64) {
+    let ns_per_byte = 10.0e9 / f64::from(baud.max(1));
+    let mut decoder = StreamDecoder::new();
+    let mut out = Vec::new();
+    let mut consumed = 0u64;
+    for chunk in chunks {
+        let chunk_end = consumed + chunk.bytes.len() as u64;
+        decoder.feed(&chunk.bytes, |d| {
+            let after = chunk_end.saturating_sub(d.end_offset.max(consumed));
+            let back = (after as f64 * ns_per_byte) as u64;
+            out.push(Arrival {
+                frame: d.frame,
+                arrival_ns: chunk.host_time_ns.saturating_sub(back),
+            });
+        });
+        consumed = chunk_end;
+    }
+    if let Some(d) = decoder.finish() {
+        let t = chunks.last().map_or(0, |c| c.host_time_ns);
+        out.push(Arrival {
+            frame: d.frame,
+            arrival_ns: t,
+        });
+    }
+    (out, decoder.stats(), consumed)
+}
+
+/// Unwraps 8-bit counters into sample indices using arrival times.
+fn unwrap_counter(prev: Option<(i64, u64)>, counter: u8, arrival_ns: u64, period_ns: f64) -> i64 {
+    let Some((k0, t0)) = prev else {
+        return i64::from(counter);
+    };
+    let guess = k0 as f64 + (arrival_ns as f64 - t0 as f64) / period_ns;
+    let base = guess.round() as i64;
+    let offset = (i64::from(counter) - base).rem_euclid(256);
+    let k = if offset > 128 {
+        base + offset - 256
+    } else {
+        base + offset
+    };
+    k.max(k0 + 1)
+}
+
+/// Decodes the link into timed IMU samples and button changes.
+pub fn imu_stream(
+    chunks: &[LinkChunk],
+    baud: u32,
+    sample_rate_hz: u32,
+    scale: &ImuScale,
+) -> ImuStream {
+    let period_ns = 1e9 / f64::from(sample_rate_hz.max(1));
+    let (arrivals, stats, bytes) = decode_arrivals(chunks, baud);
+    let packet_ns = (FRAME_LEN as f64 * 10.0e9 / f64::from(baud.max(1))) as u64;
+    let mut indexed = Vec::new();
+    let mut prev: Option<(i64, u64)> = None;
+    let mut statuses = Vec::new();
+    for a in &arrivals {
+        match a.frame {
+            Frame::Sensor(p) => {
+                let k = unwrap_counter(prev, p.counter, a.arrival_ns, period_ns);
+                prev = Some((k, a.arrival_ns));
+                indexed.push((k, a.arrival_ns, p));
+            }
+            Frame::Status(s) => statuses.push((prev, s)),
+        }
+    }
+    // Lower envelope of arrival - k T; the packet's own serial time is part of the minimum latency.
+    let anchor = indexed
+        .iter()
+        .map(|(k, t, _)| *t as f64 - *k as f64 * period_ns)
+        .fold(f64::INFINITY, f64::min)
+        - packet_ns as f64;
+    let time_of = |k: i64| (anchor + k as f64 * period_ns).max(0.0) as u64;
+    let samples = indexed
+        .iter()
+        .map(|(k, _, p)| scale.to_si(time_of(*k), p.accel, p.gyro, p.mag))
+        .collect();
+    let mut buttons: Vec<ButtonChange> = Vec::new();
+    for (prev, s) in statuses {
+        // The status follows the sensor packet it names; place the change at that sample.
+        let k = match prev {
+            Some((k, _)) => k - i64::from(prev_counter_gap(prev, s.sensor_counter)),
+            None => -1,
+        };
+        let t_ns = if anchor.is_finite() { time_of(k) } else { 0 };
+        if buttons.last().is_none_or(|b| b.buttons != s.buttons.0) {
+            buttons.push(ButtonChange {
+                t_ns,
+                buttons: s.buttons.0,
+            });
+        }
+    }
+    ImuStream {
+        samples,
+        buttons,
+        stats,
+        bytes,
+    }
+}
+
+/// How many samples before the last decoded sensor packet the status's named counter lies (0 normally).
+fn prev_counter_gap(prev: Option<(i64, u64)>, sensor_counter: u8) -> u8 {
+    match prev {
+        Some((k, _)) => (k.rem_euclid(256) as u8).wrapping_sub(sensor_counter),
+        None => 0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fires_protocol::{Buttons, SensorPacket, StatusPacket};
+
+    fn chunk(t_ns: u64, frames: &[[u8; 22]]) -> LinkChunk {
+        LinkChunk {
+            host_time_ns: t_ns,
+            bytes: frames.iter().flatten().copied().collect(),
+        }
+    }
+
+    #[test]
+    fn samples_are_timed_on_a_regular_grid_despite_latency_jitter() {
+        let period = 10_000_000u64;
+        let jitter = [3_000_000u64, 0, 7_000_000, 1_000_000, 4_000_000];
+        let chunks: Vec<LinkChunk> = (0..600u64)
+            .map(|k| {
+                let p = SensorPacket {
+                    counter: k as u8,
+                    ..Default::default()
+                }
+                .encode();
+                chunk(
+                    1_000_000_000 + k * period + 2_000_000 + jitter[(k % 5) as usize],
+                    &[p],
+                )
+            })
+            .collect();
+        let s = imu_stream(&chunks, 230_400, 100, &ImuScale::default());
+        assert_eq!(s.samples.len(), 600);
+        for w in s.samples.windows(2) {
+            assert_eq!(w[1].t_ns - w[0].t_ns, period);
+        }
+        // Anchored on the fastest packet (latency 2 ms, less its own serial time).
+        let first = s.samples[0].t_ns as i64;
+        assert!((first - 1_002_000_000).abs() < 1_000_000, "{first}");
+    }
+
+    #[test]
+    fn counters_unwrap_across_an_outage_longer_than_256_packets() {
+        let period = 10_000_000u64;
+        let ks: Vec<u64> = (0..50).chain(400..450).collect();
+        let chunks: Vec<LinkChunk> = ks
+            .iter()
+            .map(|&k| {
+                chunk(
+                    k * period + 1_000_000,
+                    &[SensorPacket {
+                        counter: k as u8,
+                        ..Default::default()
+                    }
+                    .encode()],
+                )
+            })
+            .collect();
+        let s = imu_stream(&chunks, 230_400, 100, &ImuScale::default());
+        assert_eq!(s.samples.len(), 100);
+        let gap = s.samples[50].t_ns - s.samples[49].t_ns;
+        assert_eq!(gap, 351 * period);
+    }
+
+    #[test]
+    fn button_changes_are_placed_at_the_named_sample() {
+        let period = 10_000_000u64;
+        let mut frames = Vec::new();
+        for k in 0..20u8 {
+            frames.push(
+                SensorPacket {
+                    counter: k,
+                    ..Default::default()
+                }
+                .encode(),
+            );
+            if k == 9 || k == 14 {
+                let pressed = k == 9;
+                frames.push(
+                    StatusPacket {
+                        sensor_counter: k,
+                        sequence: u8::from(!pressed),
+                        buttons: Buttons(u8::from(pressed)),
+                        ..Default::default()
+                    }
+                    .encode(),
+                );
+            }
+        }
+        let chunks: Vec<LinkChunk> = frames
+            .iter()
+            .enumerate()
+            .map(|(i, f)| chunk(i as u64 * period + 5_000_000, &[*f]))
+            .collect();
+        let s = imu_stream(&chunks, 230_400, 100, &ImuScale::default());
+        assert_eq!(s.buttons.len(), 2);
+        assert_eq!(s.buttons[0].buttons, 1);
+        assert_eq!(s.buttons[1].buttons, 0);
+        let t9 = s.samples[9].t_ns;
+        let t14 = s.samples[14].t_ns;
+        assert_eq!(s.buttons[0].t_ns, t9);
+        assert_eq!(s.buttons[1].t_ns, t14);
+    }
+}

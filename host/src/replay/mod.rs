@@ -1,0 +1,15 @@
+//! Replay: one pipeline from a recording (simulated or of real hardware) to strokes, per-frame tracks and a
+//! report (architecture.md §1, §4). Live tracking feeds the same [`crate::track::Tracker`]; replaying the same
+//! recording twice gives identical output, since nothing here reads a clock.
+//!
+//! Stages: link bytes -> [`imu_stream`] (decode, sample times, buttons) -> camera frames (blob lists, or 8-bit
+//! images through [`crate::vision::BlobDetector`] with the tracker's predicted window) -> tracker (stereo,
+//! identification, tip, fusion) -> strokes (button-delimited, Gaussian display smoothing, B-spline
+//! post-processing) -> [`report`] against ground truth when the recording has it.
+
+pub mod imu_stream;
+pub mod report;
+pub mod rig;
+pub mod run;
+
+pub use run::{replay, ReplayConfig, ReplayError, ReplayOutput, StrokeOut};

@@ -1,0 +1,136 @@
+//! Accuracy and health of a replay, measured against the recording's ground truth when it has one.
+//!
+//! Tip errors compare each tracked tip with the true tip interpolated at the sample's time (exposure truth of
+//! the left camera, the frame the tracker's samples are timed by). A *mislabel* is an accepted LED label whose
+//! triangulated LED lies more than [`MISLABEL_M`] from the true position of the LED it was labelled as, while
+//! another LED is closer: the wrong-identity error the thesis's distance test exists to prevent.
+
+use fires_record::ExposureTruth;
+use serde::Serialize;
+
+use super::run::ReplayOutput;
+use crate::track::pipeline::TrackQuality;
+
+/// Distance beyond which a labelled LED counts as mislabelled, metres (half the pen's smallest LED gap).
+pub const MISLABEL_M: f64 = 0.020;
+
+/// Tip accuracy figures (present when the recording has ground truth).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Accuracy {
+    /// Root mean square tip error, millimetres.
+    pub tip_rmse_mm: f64,
+    /// 95th percentile tip error, millimetres.
+    pub tip_p95_mm: f64,
+    /// Fraction of tracked frames with the tip within 2 mm.
+    pub frac_within_2mm: f64,
+    /// The same over frames whose tip is at most 1 m from the left camera.
+    pub frac_within_2mm_le_1m: f64,
+    /// Frames (tracked, with truth) at most 1 m from the left camera.
+    pub frames_le_1m: usize,
+    /// Accepted LED labels that name the wrong LED.
+    pub mislabels: usize,
+    /// Accepted LED labels checked.
+    pub labels_checked: usize,
+}
+
+/// Interpolates the true tip and LEDs at `t_ns` from time-sorted exposure truth of one camera.
+pub fn truth_at(truth: &[ExposureTruth], t_ns: u64) -> Option<([f64; 3], Vec<[f64; 3]>)> {
+    let i = truth.partition_point(|e| e.exposure_time_ns <= t_ns);
+    let (a, b) = (
+        truth.get(i.checked_sub(1)?)?,
+        truth.get(i).unwrap_or(truth.get(i - 1)?),
+    );
+    let span = b.exposure_time_ns.saturating_sub(a.exposure_time_ns);
+    // Frames are matched on exposure times: refuse to extrapolate beyond one frame gap.
+    if t_ns.saturating_sub(a.exposure_time_ns) > span.max(1) * 2 {
+        return None;
+    }
+    let w = if span == 0 {
+        0.0
+    } else {
+        (t_ns - a.exposure_time_ns) as f64 / span as f64
+    };
+    let lerp = |p: &[f64; 3], q: &[f64; 3]| [0, 1, 2].map(|k| p[k] + w * (q[k] - p[k]));
+    let tip = lerp(&a.pose.tip_m, &b.pose.tip_m);
+    let leds = a
+        .pose
+        .leds_m
+        .iter()
+        .zip(&b.pose.leds_m)
+        .map(|(p, q)| lerp(p, q))
+        .collect();
+    Some((tip, leds))
+}
+
+fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// Percentile (0..=1) of a sorted slice.
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    let i = ((sorted.len() - 1) as f64 * q).round() as usize;
+    sorted[i.min(sorted.len() - 1)]
+}
+
+/// Tip accuracy and label correctness of the replay against exposure truth (world = left camera frame).
+pub fn accuracy(out: &ReplayOutput, left_truth: &[ExposureTruth]) -> Accuracy {
+    let mut errors = Vec::new();
+    let mut near = (0usize, 0usize);
+    let (mut mislabels, mut checked) = (0, 0);
+    for s in &out.samples {
+        let Some((tip_true, leds_true)) = truth_at(left_truth, s.t_ns) else {
+            continue;
+        };
+        if let (Some(tip), TrackQuality::Vision { .. }) = (s.tip, s.quality) {
+            let e = dist(&tip, &tip_true);
+            errors.push(e);
+            if dist(&tip_true, &[0.0; 3]) <= 1.0 {
+                near.0 += 1;
+                near.1 += usize::from(e <= 0.002);
+            }
+        }
+        for (label, led) in s.leds.iter().enumerate() {
+            let (Some(p), Some(t)) = (led, leds_true.get(label)) else {
+                continue;
+            };
+            checked += 1;
+            let own = dist(p, t);
+            let other = leds_true
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != label)
+                .map(|(_, q)| dist(p, q));
+            if own > MISLABEL_M && other.fold(f64::INFINITY, f64::min) < own {
+                mislabels += 1;
+            }
+        }
+    }
+    let n = errors.len();
+    let rmse = if n == 0 {
+        0.0
+    } else {
+        (errors.iter().map(|e| e * e).sum::<f64>() / n as f64).sqrt()
+    };
+    errors.sort_by(f64::total_cmp);
+    let within = errors.iter().filter(|e| **e <= 0.002).count();
+    Accuracy {
+        tip_rmse_mm: rmse * 1e3,
+        tip_p95_mm: percentile(&errors, 0.95) * 1e3,
+        frac_within_2mm: if n == 0 {
+            0.0
+        } else {
+            within as f64 / n as f64
+        },
+        frac_within_2mm_le_1m: if near.0 == 0 {
+            0.0
+        } else {
+            near.1 as f64 / near.0 as f64
+        },
+        frames_le_1m: near.0,
+        mislabels,
+        labels_checked: checked,
+    }
+}

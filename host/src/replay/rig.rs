@@ -1,0 +1,100 @@
+//! Conversions from a recording's metadata to the tracker's types.
+
+use fires_record::{CameraModel, Meta};
+use nalgebra::{Matrix3, Vector3};
+
+use crate::stereo::{CameraIntrinsics, Distortion, StereoRig};
+use crate::track::fusion::ImuScale;
+use crate::track::PenGeometry;
+
+/// Why a recording's metadata cannot drive the tracker.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MetaError {
+    /// The rig needs exactly two cameras.
+    #[error("the rig has {0} camera(s); stereo tracking needs 2")]
+    CameraCount(usize),
+    /// The tracker is built for the four-LED pen.
+    #[error("the pen has {0} LED(s); the tracker needs 4 (two-LED bars are measured separately)")]
+    LedCount(usize),
+}
+
+/// The host camera model of a recorded camera.
+pub fn intrinsics(m: &CameraModel) -> CameraIntrinsics {
+    CameraIntrinsics {
+        width: m.width,
+        height: m.height,
+        fx: m.fx,
+        fy: m.fy,
+        cx: m.cx,
+        cy: m.cy,
+        distortion: Distortion {
+            k1: m.k1,
+            k2: m.k2,
+            p1: m.p1,
+            p2: m.p2,
+            k3: m.k3,
+        },
+    }
+}
+
+/// The stereo rig of a recording; camera 0 (left) defines the world frame.
+pub fn stereo_rig(meta: &Meta) -> Result<StereoRig, MetaError> {
+    let [left, right] = meta.rig.cameras.as_slice() else {
+        return Err(MetaError::CameraCount(meta.rig.cameras.len()));
+    };
+    // Camera 0 may itself sit at a pose in the world; the tracker works in the left camera's frame.
+    let (rl, tl) = (
+        mat(&left.extrinsics.rotation),
+        Vector3::from(left.extrinsics.translation_m),
+    );
+    let (rr, tr) = (
+        mat(&right.extrinsics.rotation),
+        Vector3::from(right.extrinsics.translation_m),
+    );
+    let r = rr * rl.transpose();
+    let t = tr - r * tl;
+    Ok(StereoRig::new(
+        intrinsics(&left.intrinsics),
+        intrinsics(&right.intrinsics),
+        r,
+        t,
+    ))
+}
+
+/// World -> left-camera transform of the recording (identity when camera 0 defines the world).
+pub fn world_to_left(meta: &Meta) -> Option<(Matrix3<f64>, Vector3<f64>)> {
+    let left = meta.rig.cameras.first()?;
+    Some((
+        mat(&left.extrinsics.rotation),
+        Vector3::from(left.extrinsics.translation_m),
+    ))
+}
+
+fn mat(r: &[[f64; 3]; 3]) -> Matrix3<f64> {
+    Matrix3::from_row_slice(&[
+        r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2],
+    ])
+}
+
+/// The pen of a recording.
+pub fn pen_geometry(meta: &Meta) -> Result<PenGeometry, MetaError> {
+    let l = &meta.pen.led_positions_m;
+    let [a, b, c, d] = l.as_slice() else {
+        return Err(MetaError::LedCount(l.len()));
+    };
+    Ok(PenGeometry {
+        led_offsets: [*a, *b, *c, *d],
+        tip_offset: meta.pen.tip_offset_m,
+    })
+}
+
+/// Count -> SI conversion from the board's scale factors (magnetometer in µT, the fusion's unit).
+pub fn imu_scale(meta: &Meta) -> ImuScale {
+    let s = &meta.scale_factors;
+    ImuScale {
+        accel_per_count: s.accel_mps2_per_count,
+        gyro_per_count: s.gyro_radps_per_count,
+        mag_per_count: s.mag_tesla_per_count * 1e6,
+        ..ImuScale::default()
+    }
+}

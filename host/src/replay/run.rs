@@ -1,0 +1,310 @@
+//! The replay loop: every IMU sample and camera frame of a recording, in time order, through the tracker.
+
+use std::time::Instant;
+
+use fires_record::{FrameContent, RecordError, RecordingReader};
+
+use super::imu_stream::{imu_stream, ImuStream};
+use super::rig::{imu_scale, pen_geometry, stereo_rig, MetaError};
+use crate::stereo::CameraId;
+use crate::stroke::{postprocess, GaussianConfig, PostprocessConfig, StrokeEvent, StrokeSegmenter};
+use crate::track::fusion::WorldReference;
+use crate::track::pipeline::{CameraFrame, TrackSample, Tracker, TrackerConfig};
+use crate::vision::{BlobConfig, BlobDetector, GrayImage};
+
+/// What to run.
+#[derive(Debug, Clone)]
+pub struct ReplayConfig {
+    /// Tracker settings (the pen geometry is taken from the recording).
+    pub tracker: TrackerConfig,
+    /// Blob detector settings for image cameras.
+    pub blobs: BlobConfig,
+    /// Display smoothing of the tip (thesis: 300 taps, 3 passes).
+    pub smoothing: GaussianConfig,
+    /// Stroke post-processing.
+    pub postprocess: PostprocessConfig,
+    /// Mask of the button that draws (bit 0 = button 1).
+    pub draw_button_mask: u8,
+    /// Search margin around the predicted LED positions, pixels.
+    pub window_margin_px: f64,
+}
+
+impl Default for ReplayConfig {
+    fn default() -> Self {
+        ReplayConfig {
+            tracker: TrackerConfig::default(),
+            blobs: BlobConfig::default(),
+            smoothing: GaussianConfig::default(),
+            postprocess: PostprocessConfig::default(),
+            draw_button_mask: 0b0001,
+            window_margin_px: 24.0,
+        }
+    }
+}
+
+/// Errors of a replay.
+#[derive(Debug, thiserror::Error)]
+pub enum ReplayError {
+    /// The recording could not be read.
+    #[error(transparent)]
+    Record(#[from] RecordError),
+    /// The recording's metadata does not fit the tracker.
+    #[error(transparent)]
+    Meta(#[from] MetaError),
+    /// The tracker rejected its configuration.
+    #[error("tracker: {0}")]
+    Tracker(String),
+}
+
+/// One finished stroke.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct StrokeOut {
+    /// Stroke number, from 0 in order of pen-down.
+    pub id: u32,
+    /// Pen-down host time, nanoseconds.
+    pub t_start_ns: u64,
+    /// Pen-up host time, nanoseconds.
+    pub t_end_ns: u64,
+    /// Tracked tip points of the stroke (raw, as the tracker gave them), metres.
+    pub raw_points: usize,
+    /// The post-processed polyline (sampling, constrained B-spline, resampling), metres.
+    pub polyline_m: Vec<[f64; 3]>,
+}
+
+/// Time spent per stage, nanoseconds in total.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct StageTimes {
+    /// Link decode and IMU timing.
+    pub link_ns: u64,
+    /// Blob detection on images.
+    pub blobs_ns: u64,
+    /// Stereo, identification, tip and fusion.
+    pub track_ns: u64,
+    /// Stroke post-processing.
+    pub strokes_ns: u64,
+}
+
+/// Everything a replay produced.
+#[derive(Debug, Clone)]
+pub struct ReplayOutput {
+    /// One tracker sample per stereo frame pair.
+    pub samples: Vec<TrackSample>,
+    /// Finished strokes.
+    pub strokes: Vec<StrokeOut>,
+    /// The link as decoded.
+    pub imu: ImuStream,
+    /// Camera frames read, per camera.
+    pub frames: [usize; 2],
+    /// Time per stage.
+    pub times: StageTimes,
+    /// Wall time of the whole replay, nanoseconds.
+    pub wall_ns: u64,
+    /// Where the gravity/magnetic world reference came from ("truth" or "default").
+    pub world_reference: &'static str,
+}
+
+enum Event {
+    Imu(usize),
+    Frame(CameraId, fires_record::CameraFrame),
+}
+
+impl Event {
+    fn time(&self, imu: &ImuStream) -> u64 {
+        match self {
+            Event::Imu(i) => imu.samples[*i].t_ns,
+            Event::Frame(_, f) => f.exposure_time_ns,
+        }
+    }
+}
+
+/// Replays a recording through the tracker.
+pub fn replay(
+    reader: &RecordingReader,
+    config: &ReplayConfig,
+) -> Result<ReplayOutput, ReplayError> {
+    let wall = Instant::now();
+    let meta = reader.meta();
+    let mut times = StageTimes::default();
+    let t = Instant::now();
+    let imu = imu_stream(
+        &reader.link_chunks()?,
+        meta.link.baud,
+        meta.link.sample_rate_hz,
+        &imu_scale(meta),
+    );
+    times.link_ns = t.elapsed().as_nanos() as u64;
+
+    let mut tracker_cfg = config.tracker.clone();
+    tracker_cfg.pen = pen_geometry(meta)?;
+    let world_reference = match reader.world_truth()? {
+        Some(w) => {
+            tracker_cfg.world = world_reference(&w);
+            "truth"
+        }
+        None => "default",
+    };
+    let mut tracker = Tracker::new(stereo_rig(meta)?, tracker_cfg)
+        .map_err(|e| ReplayError::Tracker(e.to_string()))?;
+
+    let mut events: Vec<Event> = (0..imu.samples.len()).map(Event::Imu).collect();
+    let mut frames = [0usize; 2];
+    let mut images = [false; 2];
+    for (cam, id) in [(0u8, CameraId::Left), (1u8, CameraId::Right)] {
+        let list = reader.frames(cam)?;
+        frames[usize::from(cam)] = list.len();
+        images[usize::from(cam)] = meta
+            .cameras
+            .iter()
+            .any(|c| c.id == cam && c.provides == FrameContent::Images);
+        events.extend(list.into_iter().map(|f| Event::Frame(id, f)));
+    }
+    events.sort_by_key(|e| e.time(&imu));
+
+    let mut detectors = [
+        BlobDetector::new(config.blobs),
+        BlobDetector::new(config.blobs),
+    ];
+    let mut samples = Vec::new();
+    let mut segmenter = StrokeSegmenter::default();
+    let mut strokes = Vec::new();
+    let mut buttons = imu.buttons.iter().peekable();
+    let mut drawing = false;
+    for event in events {
+        let now = event.time(&imu);
+        while let Some(b) = buttons.next_if(|b| b.t_ns <= now) {
+            let pressed = b.buttons & config.draw_button_mask != 0;
+            if pressed != drawing {
+                drawing = pressed;
+                finish_stroke(
+                    segmenter.button(b.t_ns, pressed),
+                    config,
+                    &mut strokes,
+                    &mut times,
+                );
+            }
+        }
+        match event {
+            Event::Imu(i) => {
+                let t = Instant::now();
+                if let Some(s) = tracker.push_imu(&imu.samples[i]) {
+                    segmenter.tip(s.t_ns, s.tip);
+                    samples.push(s);
+                }
+                times.track_ns += t.elapsed().as_nanos() as u64;
+            }
+            Event::Frame(id, f) => {
+                let t = Instant::now();
+                let frame = camera_frame(
+                    reader,
+                    &f,
+                    id,
+                    images[id as usize],
+                    &mut detectors,
+                    &tracker,
+                    config,
+                )?;
+                times.blobs_ns += t.elapsed().as_nanos() as u64;
+                let t = Instant::now();
+                if let Some(s) = tracker.push_frame(frame) {
+                    segmenter.tip(s.t_ns, s.tip);
+                    samples.push(s);
+                }
+                times.track_ns += t.elapsed().as_nanos() as u64;
+            }
+        }
+    }
+    if drawing {
+        let end = samples.last().map_or(0, |s| s.t_ns);
+        finish_stroke(
+            segmenter.button(end, false),
+            config,
+            &mut strokes,
+            &mut times,
+        );
+    }
+    Ok(ReplayOutput {
+        samples,
+        strokes,
+        imu,
+        frames,
+        times,
+        wall_ns: wall.elapsed().as_nanos() as u64,
+        world_reference,
+    })
+}
+
+fn world_reference(w: &fires_record::WorldTruth) -> WorldReference {
+    let g = w.gravity_world_mps2;
+    let norm = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+    let up = if norm > 0.0 {
+        [-g[0] / norm, -g[1] / norm, -g[2] / norm]
+    } else {
+        WorldReference::default().up
+    };
+    WorldReference {
+        up,
+        magnetic: w.earth_field_world_t,
+        gravity: if norm > 0.0 {
+            norm
+        } else {
+            WorldReference::default().gravity
+        },
+    }
+}
+
+/// The blobs of one recorded frame: the device's list, or detection on the image around the predicted LEDs.
+fn camera_frame(
+    reader: &RecordingReader,
+    f: &fires_record::CameraFrame,
+    id: CameraId,
+    is_image: bool,
+    detectors: &mut [BlobDetector; 2],
+    tracker: &Tracker,
+    config: &ReplayConfig,
+) -> Result<CameraFrame, ReplayError> {
+    if !is_image {
+        let blobs = f.blobs.as_deref().unwrap_or_default();
+        return Ok(CameraFrame {
+            camera: id,
+            t_ns: f.exposure_time_ns,
+            blobs: blobs.iter().map(|b| [b.x, b.y]).collect(),
+        });
+    }
+    let Some(img) = reader.image(f)? else {
+        return Ok(CameraFrame {
+            camera: id,
+            t_ns: f.exposure_time_ns,
+            blobs: Vec::new(),
+        });
+    };
+    let blobs = match GrayImage::new(img.width as usize, img.height as usize, &img.data) {
+        Ok(view) => {
+            let window = tracker.predicted_window(id, f.exposure_time_ns, config.window_margin_px);
+            detectors[id as usize].detect(&view, window)
+        }
+        Err(_) => Vec::new(),
+    };
+    Ok(CameraFrame::from_blobs(id, f.exposure_time_ns, &blobs))
+}
+
+fn finish_stroke(
+    event: Option<StrokeEvent>,
+    config: &ReplayConfig,
+    out: &mut Vec<StrokeOut>,
+    times: &mut StageTimes,
+) {
+    let Some(StrokeEvent::Ended(stroke)) = event else {
+        return;
+    };
+    let t = Instant::now();
+    let raw: Vec<[f64; 3]> = stroke.points.iter().map(|p| p.p).collect();
+    let polyline_m = postprocess(&raw, &config.postprocess).unwrap_or(raw.clone());
+    out.push(StrokeOut {
+        id: out.len() as u32,
+        t_start_ns: stroke.t_start_ns,
+        t_end_ns: stroke.t_end_ns,
+        raw_points: raw.len(),
+        polyline_m,
+    });
+    times.strokes_ns += t.elapsed().as_nanos() as u64;
+}
