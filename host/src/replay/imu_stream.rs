@@ -41,35 +41,44 @@ struct Arrival {
     arrival_ns: u64,
 }
 
-/// Decodes every chunk and times each frame by the serial position of its last byte within its chunk.
+/// Decodes every chunk and times each frame by the serial position of its last byte within the chunk that
+/// delivered that byte (the decoder may release a frame a few bytes later, in the next chunk).
 fn decode_arrivals(
     chunks: &[LinkChunk],
     baud: u32,
 ) -> (Vec<Arrival>, fires_protocol::DecoderStats, u64) {
     let ns_per_byte = 10.0e9 / f64::from(baud.max(1));
+    let mut ends = Vec::with_capacity(chunks.len());
+    let mut total = 0u64;
+    for c in chunks {
+        total += c.bytes.len() as u64;
+        ends.push(total);
+    }
+    let arrival = |end_offset: u64| -> u64 {
+        let i = ends
+            .partition_point(|&e| e < end_offset)
+            .min(chunks.len().saturating_sub(1));
+        let after = ends.get(i).map_or(0, |&e| e.saturating_sub(end_offset));
+        let t = chunks.get(i).map_or(0, |c| c.host_time_ns);
+        t.saturating_sub((after as f64 * ns_per_byte) as u64)
+    };
     let mut decoder = StreamDecoder::new();
     let mut out = Vec::new();
-    let mut consumed = 0u64;
     for chunk in chunks {
-        let chunk_end = consumed + chunk.bytes.len() as u64;
         decoder.feed(&chunk.bytes, |d| {
-            let after = chunk_end.saturating_sub(d.end_offset.max(consumed));
-            let back = (after as f64 * ns_per_byte) as u64;
             out.push(Arrival {
                 frame: d.frame,
-                arrival_ns: chunk.host_time_ns.saturating_sub(back),
-            });
+                arrival_ns: arrival(d.end_offset),
+            })
         });
-        consumed = chunk_end;
     }
     if let Some(d) = decoder.finish() {
-        let t = chunks.last().map_or(0, |c| c.host_time_ns);
         out.push(Arrival {
             frame: d.frame,
-            arrival_ns: t,
+            arrival_ns: arrival(d.end_offset),
         });
     }
-    (out, decoder.stats(), consumed)
+    (out, decoder.stats(), total)
 }
 
 /// Unwraps 8-bit counters into sample indices using arrival times.
