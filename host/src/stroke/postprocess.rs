@@ -8,7 +8,7 @@
 //!    well-posed;
 //! 3. [`BSpline::resample`]: points at equal arc-length spacing, ends included exactly.
 //!
-//! Degree, knots, weights and constraints are not in the thesis [I]; these are the digest's
+//! Degree, knots, weights and constraints are not in the thesis (digest tag \[I\]); these are the digest's
 //! "natural" choices. The constrained solve eliminates the two fixed control points (the clamped
 //! spline passes through its first and last control points), which is exactly the KKT solution.
 

@@ -50,6 +50,8 @@ pub struct IdentifyConfig {
     pub accept_sigmas: f64,
     /// Smallest distance band when the noise is known, metres (model and calibration errors).
     pub tolerance_floor: f64,
+    /// Maximum relative deviation of the 4-LED image cross-ratio from the pen's.
+    pub image_cross_ratio_tolerance: f64,
     /// Image-evidence check: an unused blob within this distance of the predicted pen line
     /// (pixels) must be near a predicted LED.
     pub image_line_px: f64,
@@ -126,6 +128,7 @@ impl Default for IdentifyConfig {
             ambiguity_sigmas: 4.0,
             competitor_margin_px: 1.0,
             image_line_px: 2.5,
+            image_cross_ratio_tolerance: 0.1,
             accept_sigmas: 3.0,
             tolerance_floor: 0.0015,
             image_match_px: 3.0,
@@ -285,6 +288,40 @@ impl Identifier {
         }
     }
 
+    /// With four labelled LEDs, the cross-ratio of their blobs along the image line must match
+    /// the pen's (a projective invariant, anchors-tracking.md §8.3); checked when the pen spans at
+    /// least 40 px in that image.
+    #[allow(clippy::too_many_arguments)]
+    fn image_cross_ratio_ok(
+        &self,
+        cands: &[Candidate],
+        id: &Identification,
+        cam: usize,
+        blobs: &[[f64; 2]],
+        origin: &[f64; 2],
+        d: &[f64; 2],
+        span_px: f64,
+    ) -> bool {
+        if id.count() < LED_COUNT || span_px < 40.0 {
+            return true;
+        }
+        let mut s = [0.0; LED_COUNT];
+        for (i, k) in id.assignment.iter().enumerate() {
+            let Some(k) = k else { return true };
+            let idx = if cam == 0 {
+                cands[*k].left
+            } else {
+                cands[*k].right
+            };
+            let Some(b) = blobs.get(idx) else { return true };
+            s[i] = (b[0] - origin[0]) * d[0] + (b[1] - origin[1]) * d[1];
+        }
+        let cr = cross_ratio_1d(s);
+        cr.is_finite()
+            && ((cr - self.cross_ratio) / self.cross_ratio).abs()
+                <= self.config.image_cross_ratio_tolerance
+    }
+
     fn image_consistent(
         &self,
         cands: &[Candidate],
@@ -341,6 +378,9 @@ impl Identifier {
             let len = d[0].hypot(d[1]);
             if len * f < 3.0 {
                 continue;
+            }
+            if !self.image_cross_ratio_ok(cands, id, cam, blob_list, &m[0], &d, len * f) {
+                return false;
             }
             for (b, blob) in blob_list.iter().enumerate() {
                 if used(b) || !blob.iter().all(|v| v.is_finite()) {

@@ -355,6 +355,15 @@ impl Tracker {
         f + alpha.cross(&r) + w.cross(&w.cross(&r))
     }
 
+    /// The tip predicted at `t_ns` (e.g. an IMU timestamp between frames) from the tip filter and
+    /// the IMU acceleration; None while occluded or when the last vision tip is too old.
+    pub fn predict_tip(&self, t_ns: u64) -> Option<[f64; 3]> {
+        if self.occluded {
+            return None;
+        }
+        self.tip_filter.predict(t_ns).map(Into::into)
+    }
+
     /// The right-camera clock offset in use: configured plus estimated, nanoseconds.
     pub fn clock_offset_ns(&self) -> i64 {
         self.config
@@ -943,6 +952,75 @@ mod tests {
             meds[0] < meds[3],
             "default fusion should beat the thesis model"
         );
+    }
+
+    /// End to end from rendered 8-bit frames: Gaussian LED spots at the projected positions,
+    /// blob detection with the tracker's predicted window, then tracking.
+    #[test]
+    fn rendered_frames_through_blob_detection() {
+        use crate::vision::{blobs::render_spots, BlobConfig, BlobDetector, GrayImage};
+        let rig = StereoRig::parallel(1024, 768, 45f64.to_radians(), 0.25);
+        let pen = PenGeometry::thesis();
+        let cfg = TrackerConfig::default();
+        let world = cfg.world;
+        let mut tracker = Tracker::new(rig.clone(), cfg).unwrap();
+        let mut detector = BlobDetector::new(BlobConfig::default());
+        let motion = PenMotion::drawing();
+        let mut rng = SplitMix64::new(12);
+        let (imu_dt, cam_dt) = (5_000_000u64, 16_666_667u64);
+        let mut events: Vec<(u64, u8)> = (1..400).map(|k| (k * imu_dt, 0)).collect();
+        events.extend((1..120).map(|k| (k * cam_dt, 1)));
+        events.extend((1..120).map(|k| (k * cam_dt + 7_000_000, 2)));
+        events.sort();
+        let (mut errors, mut windowed) = (Vec::new(), 0);
+        for (t, kind) in events {
+            if kind == 0 {
+                tracker.push_imu(&imu_sample(
+                    &motion,
+                    t,
+                    &world,
+                    &ImuNoise::default(),
+                    &mut rng,
+                ));
+                continue;
+            }
+            let cam = if kind == 1 {
+                CameraId::Left
+            } else {
+                CameraId::Right
+            };
+            let proj = project_leds(&rig, &pen, &motion.pose(t as f64 * 1e-9), 0.0, &mut rng);
+            let spots: Vec<_> = proj[usize::from(kind - 1)]
+                .iter()
+                .flatten()
+                .map(|p| (p[0], p[1], 1.3, 180.0))
+                .collect();
+            let img = render_spots(1024, 768, 12, &spots);
+            let image = GrayImage::new(1024, 768, &img).unwrap();
+            let window = tracker.predicted_window(cam, t, 40.0);
+            let mut blobs = Vec::new();
+            if detector.detect_into(&image, window, &mut blobs)
+                == crate::vision::SearchRegion::Window
+            {
+                windowed += 1;
+            }
+            let Some(s) = tracker.push_frame(CameraFrame::from_blobs(cam, t, &blobs)) else {
+                continue;
+            };
+            if let (TrackQuality::Vision { .. }, Some(tip)) = (s.quality, s.tip) {
+                let truth = motion.pose(s.t_ns as f64 * 1e-9);
+                errors.push(
+                    (Vector3::from(tip) - pen.tip_position(&truth.led1, &truth.rotation)).norm(),
+                );
+            }
+        }
+        let med = median(&mut errors);
+        eprintln!(
+            "rendered: {} tips, median error {:.3} mm, {windowed} windowed detections",
+            errors.len(),
+            med * 1e3
+        );
+        assert!(errors.len() > 200 && med < 0.001 && windowed > 150);
     }
 
     #[test]

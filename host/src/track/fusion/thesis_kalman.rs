@@ -8,7 +8,7 @@
 //! The standard predict/update equations are used; the vision rows and the inertial rows can be
 //! applied separately (partial H) because the camera and the IMU are asynchronous.
 //!
-//! Decisions the thesis leaves open [I], as recommended by the digest: the angles are elevation
+//! Decisions the thesis leaves open (digest tag \[I\]), as recommended by the digest: the angles are elevation
 //! `θ = asin(v·up)` and azimuth `γ` about "up" from magnetic north (azimuth innovations wrap);
 //! the inertial direction comes from accelerometer + magnetometer (TRIAD); the gyroscope is not a
 //! measurement (as in the thesis, ω is inferred through the dynamics only); `Q = diag(q_α dt,
