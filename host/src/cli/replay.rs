@@ -34,6 +34,9 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<serde_json::Value> {
         "thesis" => fires_host::track::fusion::FusionKind::ThesisKalman,
         other => anyhow::bail!("unknown fusion '{other}' (orientation, thesis)"),
     };
+    if reader.meta().pen.led_positions_m.len() == 2 {
+        return bar_to_dir(&reader, args);
+    }
     let out = replay(&reader, &config)
         .with_context(|| format!("replay of {}", args.recording.display()))?;
     std::fs::create_dir_all(&args.out)
@@ -44,6 +47,38 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<serde_json::Value> {
     )?;
     write_track_csv(&args.out.join("track.csv"), &out)?;
     let report = report(&reader, &out, &args.fusion)?;
+    write_json(&args.out.join("report.json"), &report)?;
+    Ok(report)
+}
+
+/// A two-LED recording is the bar experiment: lengths instead of a pen track.
+fn bar_to_dir(reader: &RecordingReader, args: &ReplayArgs) -> anyhow::Result<serde_json::Value> {
+    use fires_host::replay::bar::{bar_report, measure_bar};
+    use fires_host::stereo::TriangulationMethod;
+    let l = &reader.meta().pen.led_positions_m;
+    let nominal = (l[1] - l[0]).abs();
+    let truth = reader.exposure_truth()?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let mut report = serde_json::json!({ "kind": "bar", "recording": reader.dir() });
+    for (name, method) in [
+        ("midpoint", TriangulationMethod::Midpoint),
+        ("linear", TriangulationMethod::Linear),
+        ("normal_equations", TriangulationMethod::NormalEquations),
+    ] {
+        let samples = measure_bar(reader, method)?;
+        let r = serde_json::to_value(bar_report(&samples, nominal, truth.as_deref()))?;
+        if name == "midpoint" {
+            write_json(
+                &args.out.join("bar.json"),
+                &serde_json::json!({ "samples": samples }),
+            )?;
+            for (k, v) in r.as_object().into_iter().flatten() {
+                report[k] = v.clone();
+            }
+        }
+        report[format!("method_{name}")] = r;
+    }
     write_json(&args.out.join("report.json"), &report)?;
     Ok(report)
 }
@@ -100,15 +135,11 @@ fn report(
         "wall_ms": out.wall_ns as f64 / 1e6,
     });
     if let Some(truth) = reader.exposure_truth()? {
-        let mut left: Vec<_> = truth.into_iter().filter(|e| e.camera == 0).collect();
-        left.sort_by_key(|e| e.exposure_time_ns);
-        let acc = accuracy(out, &left);
-        let duration_s = match (left.first(), left.last()) {
-            (Some(a), Some(b)) => (b.exposure_time_ns - a.exposure_time_ns) as f64 / 1e9,
-            _ => 0.0,
-        };
+        let acc = accuracy(out, &truth);
+        let t0 = truth.iter().map(|e| e.exposure_time_ns).min().unwrap_or(0);
+        let t1 = truth.iter().map(|e| e.exposure_time_ns).max().unwrap_or(0);
+        let duration_s = (t1 - t0) as f64 / 1e9;
         if let Some(map) = report.as_object_mut() {
-            map.insert("accuracy".into(), serde_json::to_value(&acc)?);
             for (k, v) in serde_json::to_value(&acc)?
                 .as_object()
                 .into_iter()

@@ -7,6 +7,7 @@
 //! identification, tip, fusion) -> strokes (button-delimited, Gaussian display smoothing, B-spline
 //! post-processing) -> [`report`] against ground truth when the recording has it.
 
+pub mod bar;
 pub mod imu_stream;
 pub mod report;
 pub mod rig;

@@ -1,9 +1,12 @@
 //! Accuracy and health of a replay, measured against the recording's ground truth when it has one.
 //!
 //! Tip errors compare each tracked tip with the true tip interpolated at the sample's time (exposure truth of
-//! the left camera, the frame the tracker's samples are timed by). A *mislabel* is an accepted LED label whose
-//! triangulated LED lies more than [`MISLABEL_M`] from the true position of the LED it was labelled as, while
-//! another LED is closer: the wrong-identity error the thesis's distance test exists to prevent.
+//! the left camera, the frame the tracker's samples are timed by). A *mislabel* is an accepted LED label whose left or right
+//! image blob is not the image of that LED in that frame (see [`label_errors`]): the wrong-identity error the
+//! thesis's distance test exists to prevent, checked in the images so that a depth error is not mistaken
+//! for one.
+
+use std::collections::HashMap;
 
 use fires_record::ExposureTruth;
 use serde::Serialize;
@@ -11,8 +14,8 @@ use serde::Serialize;
 use super::run::ReplayOutput;
 use crate::track::pipeline::TrackQuality;
 
-/// Distance beyond which a labelled LED counts as mislabelled, metres (half the pen's smallest LED gap).
-pub const MISLABEL_M: f64 = 0.020;
+/// A labelled blob farther than this from the true image of its LED is not that LED's image, pixels.
+pub const MISLABEL_PX: f64 = 3.0;
 
 /// Tip accuracy figures (present when the recording has ground truth).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -34,7 +37,7 @@ pub struct Accuracy {
 }
 
 /// Interpolates the true tip and LEDs at `t_ns` from time-sorted exposure truth of one camera.
-pub fn truth_at(truth: &[ExposureTruth], t_ns: u64) -> Option<([f64; 3], Vec<[f64; 3]>)> {
+pub fn truth_at(truth: &[&ExposureTruth], t_ns: u64) -> Option<([f64; 3], Vec<[f64; 3]>)> {
     let i = truth.partition_point(|e| e.exposure_time_ns <= t_ns);
     let (a, b) = (
         truth.get(i.checked_sub(1)?)?,
@@ -75,13 +78,48 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
     sorted[i.min(sorted.len() - 1)]
 }
 
+/// Counts accepted LED labels whose left or right blob is not the image of that LED: farther than
+/// [`MISLABEL_PX`] from where the truth says the LED appeared in that frame, or the LED was not visible at all.
+/// Returns (mislabels, labels checked).
+pub fn label_errors(out: &ReplayOutput, truth: &[ExposureTruth]) -> (usize, usize) {
+    let by_frame: HashMap<(u8, u64), &ExposureTruth> =
+        truth.iter().map(|e| ((e.camera, e.index), e)).collect();
+    let is_image_of = |cam: u8, frame: u64, led: usize, px: [f64; 2]| -> Option<bool> {
+        let t = by_frame.get(&(cam, frame))?;
+        Some(
+            t.leds
+                .get(led)?
+                .pixel
+                .is_some_and(|p| (p[0] - px[0]).hypot(p[1] - px[1]) <= MISLABEL_PX),
+        )
+    };
+    let (mut wrong, mut checked) = (0, 0);
+    for lp in out.label_pixels.iter().flatten() {
+        for (led, pair) in lp.px.iter().enumerate() {
+            let Some((l, r)) = pair else { continue };
+            let (Some(ok_l), Some(ok_r)) = (
+                is_image_of(0, lp.left_frame, led, *l),
+                is_image_of(1, lp.right_frame, led, *r),
+            ) else {
+                continue;
+            };
+            checked += 1;
+            if !(ok_l && ok_r) {
+                wrong += 1;
+            }
+        }
+    }
+    (wrong, checked)
+}
+
 /// Tip accuracy and label correctness of the replay against exposure truth (world = left camera frame).
-pub fn accuracy(out: &ReplayOutput, left_truth: &[ExposureTruth]) -> Accuracy {
+pub fn accuracy(out: &ReplayOutput, truth: &[ExposureTruth]) -> Accuracy {
+    let mut left_truth: Vec<&ExposureTruth> = truth.iter().filter(|e| e.camera == 0).collect();
+    left_truth.sort_by_key(|e| e.exposure_time_ns);
     let mut errors = Vec::new();
     let mut near = (0usize, 0usize);
-    let (mut mislabels, mut checked) = (0, 0);
     for s in &out.samples {
-        let Some((tip_true, leds_true)) = truth_at(left_truth, s.t_ns) else {
+        let Some((tip_true, _)) = truth_at(&left_truth, s.t_ns) else {
             continue;
         };
         if let (Some(tip), TrackQuality::Vision { .. }) = (s.tip, s.quality) {
@@ -92,22 +130,8 @@ pub fn accuracy(out: &ReplayOutput, left_truth: &[ExposureTruth]) -> Accuracy {
                 near.1 += usize::from(e <= 0.002);
             }
         }
-        for (label, led) in s.leds.iter().enumerate() {
-            let (Some(p), Some(t)) = (led, leds_true.get(label)) else {
-                continue;
-            };
-            checked += 1;
-            let own = dist(p, t);
-            let other = leds_true
-                .iter()
-                .enumerate()
-                .filter(|(j, _)| *j != label)
-                .map(|(_, q)| dist(p, q));
-            if own > MISLABEL_M && other.fold(f64::INFINITY, f64::min) < own {
-                mislabels += 1;
-            }
-        }
     }
+    let (mislabels, checked) = label_errors(out, truth);
     let n = errors.len();
     let rmse = if n == 0 {
         0.0

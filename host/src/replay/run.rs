@@ -84,11 +84,24 @@ pub struct StageTimes {
     pub strokes_ns: u64,
 }
 
+/// Which image blobs a sample's labels name, for checking identities against ground truth.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LabelPixels {
+    /// Index of the left frame the labels refer to.
+    pub left_frame: u64,
+    /// Index of the right frame the labels refer to.
+    pub right_frame: u64,
+    /// Per LED: the labelled left and right blob positions, pixels.
+    pub px: [Option<([f64; 2], [f64; 2])>; 4],
+}
+
 /// Everything a replay produced.
 #[derive(Debug, Clone)]
 pub struct ReplayOutput {
-    /// One tracker sample per stereo frame pair.
+    /// One tracker sample per stereo frame pair (and per IMU sample while dead-reckoning).
     pub samples: Vec<TrackSample>,
+    /// For each sample, the image blobs its labels name (None for IMU-driven samples).
+    pub label_pixels: Vec<Option<LabelPixels>>,
     /// Finished strokes.
     pub strokes: Vec<StrokeOut>,
     /// The link as decoded.
@@ -102,6 +115,9 @@ pub struct ReplayOutput {
     /// Where the gravity/magnetic world reference came from ("truth" or "default").
     pub world_reference: &'static str,
 }
+
+/// The latest frame of a camera: its index and blob positions.
+type LastFrame = Option<(u64, Vec<[f64; 2]>)>;
 
 enum Event {
     Imu(usize),
@@ -165,6 +181,8 @@ pub fn replay(
         BlobDetector::new(config.blobs),
     ];
     let mut samples = Vec::new();
+    let mut label_pixels = Vec::new();
+    let mut last: [LastFrame; 2] = [None, None];
     let mut segmenter = StrokeSegmenter::default();
     let mut strokes = Vec::new();
     let mut buttons = imu.buttons.iter().peekable();
@@ -189,6 +207,7 @@ pub fn replay(
                 if let Some(s) = tracker.push_imu(&imu.samples[i]) {
                     segmenter.tip(s.t_ns, s.tip);
                     samples.push(s);
+                    label_pixels.push(None);
                 }
                 times.track_ns += t.elapsed().as_nanos() as u64;
             }
@@ -204,9 +223,11 @@ pub fn replay(
                     config,
                 )?;
                 times.blobs_ns += t.elapsed().as_nanos() as u64;
+                last[id as usize] = Some((f.index, frame.blobs.clone()));
                 let t = Instant::now();
                 if let Some(s) = tracker.push_frame(frame) {
                     segmenter.tip(s.t_ns, s.tip);
+                    label_pixels.push(labelled_pixels(&s, &last));
                     samples.push(s);
                 }
                 times.track_ns += t.elapsed().as_nanos() as u64;
@@ -224,12 +245,28 @@ pub fn replay(
     }
     Ok(ReplayOutput {
         samples,
+        label_pixels,
         strokes,
         imu,
         frames,
         times,
         wall_ns: wall.elapsed().as_nanos() as u64,
         world_reference,
+    })
+}
+
+/// The blob positions a sample's labels point at in the current left and right frames.
+fn labelled_pixels(s: &TrackSample, last: &[LastFrame; 2]) -> Option<LabelPixels> {
+    let (Some((li, lb)), Some((ri, rb))) = (&last[0], &last[1]) else {
+        return None;
+    };
+    let px = s
+        .labels
+        .map(|l| l.and_then(|(a, b)| Some((*lb.get(a)?, *rb.get(b)?))));
+    Some(LabelPixels {
+        left_frame: *li,
+        right_frame: *ri,
+        px,
     })
 }
 

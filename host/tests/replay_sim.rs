@@ -1,0 +1,78 @@
+//! End to end without hardware: the simulator writes a recording, the replay tracks it, and the result is
+//! checked against the recording's ground truth.
+
+use std::path::PathBuf;
+
+use fires_host::replay::bar::{bar_report, measure_bar};
+use fires_host::replay::report::accuracy;
+use fires_host::replay::{replay, ReplayConfig};
+use fires_host::stereo::TriangulationMethod;
+use fires_record::RecordingReader;
+use fires_sim::{run_scenario, SimOptions};
+
+fn simulate(name: &str, seconds: f64, seed: u64) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("fires-replay-{name}-{seed}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    run_scenario(name, seed, seconds, &dir, SimOptions::default()).expect("simulate");
+    dir
+}
+
+#[test]
+fn a_fires_v1_session_is_tracked_within_2mm_with_no_wrong_labels() {
+    let dir = simulate("fires-v1", 6.0, 7);
+    let reader = RecordingReader::open(&dir).expect("open");
+    let out = replay(&reader, &ReplayConfig::default()).expect("replay");
+    let truth = reader.exposure_truth().expect("truth").expect("simulated");
+    let acc = accuracy(&out, &truth);
+    assert!(acc.labels_checked > 1000, "{acc:?}");
+    assert_eq!(acc.mislabels, 0, "{acc:?}");
+    // fires-v1: 0.5 px centroid noise at 1024x768, 45 degree field of view, 0.25 m baseline.
+    assert!(acc.frac_within_2mm > 0.9, "{acc:?}");
+    assert!(acc.tip_rmse_mm < 2.0, "{acc:?}");
+    assert_eq!(out.imu.stats.sensor_frames as usize, out.imu.samples.len());
+
+    // Replaying the same recording gives the same samples.
+    let again = replay(&reader, &ReplayConfig::default()).expect("replay");
+    assert_eq!(out.samples, again.samples);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_fires_v2_session_with_images_yields_strokes() {
+    let dir = simulate("fires-v2", 12.0, 3);
+    let reader = RecordingReader::open(&dir).expect("open");
+    let out = replay(&reader, &ReplayConfig::default()).expect("replay");
+    let strokes = reader.strokes().expect("truth").expect("simulated");
+    let complete = strokes.iter().filter(|s| s.complete).count();
+    assert!(complete >= 1, "{strokes:?}");
+    // Every pen-down that finished becomes a stroke (the last may still be open at the end).
+    assert!(
+        out.strokes.len() + 1 >= complete && out.strokes.len() <= strokes.len(),
+        "{} vs {}",
+        out.strokes.len(),
+        strokes.len()
+    );
+    assert!(out.strokes.iter().all(|s| s.polyline_m.len() >= 2));
+    let truth = reader.exposure_truth().expect("truth").expect("simulated");
+    assert_eq!(accuracy(&out, &truth).mislabels, 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_bar_is_measured_near_its_length() {
+    let dir = simulate("bar", 6.0, 2);
+    let reader = RecordingReader::open(&dir).expect("open");
+    let samples = measure_bar(&reader, TriangulationMethod::Midpoint).expect("measure");
+    let truth = reader.exposure_truth().expect("truth");
+    let report = bar_report(&samples, 0.081, truth.as_deref());
+    assert!(report.bar_frames > 100, "{report:?}");
+    let mut errors: Vec<f64> = samples.iter().map(|s| (s.length_m - 0.081).abs()).collect();
+    errors.sort_by(f64::total_cmp);
+    assert!(
+        errors[errors.len() / 2] < 0.003,
+        "median error {}",
+        errors[errors.len() / 2]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
