@@ -76,15 +76,7 @@ impl<B: RegisterBus> Mag3110<B> {
 
     /// Checks WHO_AM_I.
     pub async fn identify(&mut self) -> Result<(), SensorError<B::Error>> {
-        let found = self.bus.read_register(reg::WHO_AM_I).await?;
-        if found == WHO_AM_I_VALUE {
-            Ok(())
-        } else {
-            Err(SensorError::WrongId {
-                expected: WHO_AM_I_VALUE,
-                found,
-            })
-        }
+        super::check_identity(&mut self.bus, reg::WHO_AM_I, WHO_AM_I_VALUE).await
     }
 
     /// Writes the FIRES configuration (module docs): standby, CTRL_REG2, then active.

@@ -81,3 +81,17 @@ pub(crate) fn axes_mean(samples: &[Axes]) -> Axes {
     let n = samples.len().max(1) as i32;
     sum.map(|v| (v / n) as i16)
 }
+
+/// Reads a part's WHO_AM_I register and checks it against the datasheet value (every driver's identity check).
+pub(crate) async fn check_identity<B: bus::RegisterBus>(
+    bus: &mut B,
+    register: u8,
+    expected: u8,
+) -> Result<(), SensorError<B::Error>> {
+    let found = bus.read_register(register).await?;
+    if found == expected {
+        Ok(())
+    } else {
+        Err(SensorError::WrongId { expected, found })
+    }
+}
