@@ -72,23 +72,11 @@ impl Chessboard {
     }
 }
 
-/// One camera's intrinsics and distortion (OpenCV model k1, k2, p1, p2, k3) with the fit's RMS error.
+/// One camera's intrinsics and distortion (the recordings' camera model) with the fit's RMS error.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct CameraCalibration {
-    /// Image width, pixels.
-    pub width: u32,
-    /// Image height, pixels.
-    pub height: u32,
-    /// Focal length x, pixels.
-    pub fx: f64,
-    /// Focal length y, pixels.
-    pub fy: f64,
-    /// Principal point x, pixels.
-    pub cx: f64,
-    /// Principal point y, pixels.
-    pub cy: f64,
-    /// Distortion k1, k2, p1, p2, k3.
-    pub distortion: [f64; 5],
+    /// Intrinsics and OpenCV distortion (k1, k2, p1, p2, k3).
+    pub model: fires_record::CameraModel,
     /// RMS reprojection error of this camera's calibration, pixels.
     pub rms_px: f64,
 }
@@ -110,26 +98,6 @@ pub struct StereoCalibration {
     pub views: usize,
 }
 
-impl CameraCalibration {
-    /// The camera model recordings use (`meta.json`).
-    pub fn to_model(&self) -> fires_record::CameraModel {
-        let [k1, k2, p1, p2, k3] = self.distortion;
-        fires_record::CameraModel {
-            width: self.width,
-            height: self.height,
-            fx: self.fx,
-            fy: self.fy,
-            cx: self.cx,
-            cy: self.cy,
-            k1,
-            k2,
-            p1,
-            p2,
-            k3,
-        }
-    }
-}
-
 impl StereoCalibration {
     /// The rig as recordings store it: camera 0 (left) defines the world frame.
     pub fn to_rig(&self) -> fires_record::RigCalibration {
@@ -137,11 +105,11 @@ impl StereoCalibration {
         fires_record::RigCalibration {
             cameras: vec![
                 CalibratedCamera {
-                    intrinsics: self.left.to_model(),
+                    intrinsics: self.left.model,
                     extrinsics: Extrinsics::IDENTITY,
                 },
                 CalibratedCamera {
-                    intrinsics: self.right.to_model(),
+                    intrinsics: self.right.model,
                     extrinsics: Extrinsics {
                         rotation: self.rotation,
                         translation_m: self.translation_m,
@@ -355,13 +323,19 @@ fn camera_result(
 ) -> Result<CameraCalibration, CalibrationError> {
     let dist = |i: i32| -> Result<f64, CalibrationError> { Ok(*d.at::<f64>(i)?) };
     Ok(CameraCalibration {
-        width: size.width.max(0) as u32,
-        height: size.height.max(0) as u32,
-        fx: *k.at_2d::<f64>(0, 0)?,
-        fy: *k.at_2d::<f64>(1, 1)?,
-        cx: *k.at_2d::<f64>(0, 2)?,
-        cy: *k.at_2d::<f64>(1, 2)?,
-        distortion: [dist(0)?, dist(1)?, dist(2)?, dist(3)?, dist(4)?],
+        model: fires_record::CameraModel {
+            width: size.width.max(0) as u32,
+            height: size.height.max(0) as u32,
+            fx: *k.at_2d::<f64>(0, 0)?,
+            fy: *k.at_2d::<f64>(1, 1)?,
+            cx: *k.at_2d::<f64>(0, 2)?,
+            cy: *k.at_2d::<f64>(1, 2)?,
+            k1: dist(0)?,
+            k2: dist(1)?,
+            p1: dist(2)?,
+            p2: dist(3)?,
+            k3: dist(4)?,
+        },
         rms_px: rms,
     })
 }
