@@ -667,7 +667,7 @@ impl Identifier {
 
     /// True when another three-LED labelling of the same ordered points (same direction) fits the
     /// measured distances up to a common scale factor within `[1 / twin_scale_max,
-    /// twin_scale_max]`, each distance within the ambiguity band. The pen's triples come in
+    /// twin_scale_max]`, each distance within the acceptance band (`accept_sigmas`). The pen's triples come in
     /// near-twins ({1,2,4} vs {2,3,4}: 70:90 vs 40:50; {1,2,3} vs {1,3,4}: 70:40 vs 110:50), so a
     /// scale error (depth error from motion between unsynchronised exposures) turns one into the
     /// other while every ratio still fits.
@@ -687,7 +687,8 @@ impl Identifier {
         let l = &self.pen.led_offsets;
         let pairs = [(0, 1), (1, 2), (0, 2)];
         let measured = pairs.map(|(a, b)| (labelled[a].1.point - labelled[b].1.point).norm());
-        let bands = pairs.map(|(a, b)| self.band(labelled[a].1, labelled[b].1));
+        let bands = pairs
+            .map(|(a, b)| self.band_at(labelled[a].1, labelled[b].1, self.config.accept_sigmas));
         let max_scale = self.config.twin_scale_max;
         (0u8..16)
             .filter(|s| s.count_ones() == 3)
