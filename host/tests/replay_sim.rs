@@ -74,5 +74,29 @@ fn the_bar_is_measured_near_its_length() {
         "median error {}",
         errors[errors.len() / 2]
     );
+    // Seed 2 keeps the bar within 1 m: every length is a standalone measurement, with no gross
+    // error (right frames that bracket the left exposure are consecutive, never seconds apart).
+    assert!(report.bar_frames_le_1m > 100, "{report:?}");
+    assert!(report.bar_frac_within_2mm_le_1m > 0.8, "{report:?}");
+    assert!(report.bar_rmse_mm_le_1m < 2.5, "{report:?}");
+    assert!(
+        errors[errors.len() - 1] < 0.010,
+        "worst error {}",
+        errors[errors.len() - 1]
+    );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_stress_session_never_accepts_a_wrong_label() {
+    for seed in [1, 2] {
+        let dir = simulate("stress", 8.0, seed);
+        let reader = RecordingReader::open(&dir).expect("open");
+        let out = replay(&reader, &ReplayConfig::default()).expect("replay");
+        let truth = reader.exposure_truth().expect("truth").expect("simulated");
+        let acc = accuracy(&out, &truth);
+        assert!(acc.labels_checked > 0, "{acc:?}");
+        assert_eq!(acc.mislabels, 0, "seed {seed}: {acc:?}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

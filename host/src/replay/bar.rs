@@ -18,6 +18,8 @@ const AMBIGUOUS_GAP_M: f64 = 0.010;
 /// One measured bar length.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct BarSample {
+    /// Left frame index.
+    pub index: u64,
     /// Left exposure time, nanoseconds.
     pub t_ns: u64,
     /// Measured LED-to-LED distance, metres.
@@ -102,6 +104,9 @@ fn measure(
     Some(((best.1 - best.2).norm(), ((best.1 + best.2) / 2.0).norm()))
 }
 
+/// A right frame: index, reported exposure time and its two blobs (if it shows exactly two).
+type RightFrame = (u64, u64, Option<[[f64; 2]; 2]>);
+
 /// Measures the bar in every left frame that shows exactly two blobs.
 pub fn measure_bar(
     reader: &RecordingReader,
@@ -109,22 +114,32 @@ pub fn measure_bar(
 ) -> Result<Vec<BarSample>, ReplayError> {
     let rig = stereo_rig(reader.meta())?;
     let tri = Triangulator::new(&rig, method);
-    let right: Vec<(u64, [[f64; 2]; 2])> = reader
+    // Every right frame (not only those with two blobs): the frames that bracket a left exposure
+    // must be the two consecutive exposures around it, never frames seconds apart with the bar
+    // out of view in between.
+    let right: Vec<RightFrame> = reader
         .frames(1)?
         .iter()
-        .filter_map(|f| Some((f.exposure_time_ns, two_blobs(f)?)))
+        .map(|f| (f.index, f.exposure_time_ns, two_blobs(f)))
         .collect();
     let mut out = Vec::new();
     for f in reader.frames(0)? {
         let (Some(l), t) = (two_blobs(&f), f.exposure_time_ns) else {
             continue;
         };
-        let i = right.partition_point(|(tr, _)| *tr <= t);
+        let i = right.partition_point(|(_, tr, _)| *tr <= t);
         let (Some(a), Some(b)) = (i.checked_sub(1).and_then(|k| right.get(k)), right.get(i)) else {
             continue;
         };
-        if let Some((length_m, range_m)) = measure(&rig, &tri, l, right_at(t, *a, *b)) {
+        let ((ia, ta, Some(ra)), (ib, tb, Some(rb))) = (*a, *b) else {
+            continue;
+        };
+        if ib != ia + 1 {
+            continue;
+        }
+        if let Some((length_m, range_m)) = measure(&rig, &tri, l, right_at(t, (ta, ra), (tb, rb))) {
             out.push(BarSample {
+                index: f.index,
                 t_ns: t,
                 length_m,
                 range_m,
@@ -134,17 +149,22 @@ pub fn measure_bar(
     Ok(out)
 }
 
-/// Summarises the lengths against the nominal bar; `truth` (left-camera exposures) gives the true range when
-/// present, otherwise the measured range is used.
+/// Summarises the lengths against the nominal bar; `truth` (left-camera exposures, matched by frame index
+/// since the frame stream's times are jittered) gives the true range when present, otherwise the measured
+/// range is used.
 pub fn bar_report(
     samples: &[BarSample],
     nominal_m: f64,
     truth: Option<&[ExposureTruth]>,
 ) -> BarReport {
-    let true_range = |t: u64| -> Option<f64> {
-        let e = truth?
-            .iter()
-            .find(|e| e.camera == 0 && e.exposure_time_ns == t)?;
+    let by_index: std::collections::HashMap<u64, &ExposureTruth> = truth
+        .into_iter()
+        .flatten()
+        .filter(|e| e.camera == 0)
+        .map(|e| (e.index, e))
+        .collect();
+    let true_range = |i: u64| -> Option<f64> {
+        let e = by_index.get(&i)?;
         let [a, b] = e.pose.leds_m.get(..2)? else {
             return None;
         };
@@ -158,7 +178,7 @@ pub fn bar_report(
     let within = |s: &BarSample| (s.length_m - nominal_m).abs() <= 0.002;
     let near: Vec<&BarSample> = samples
         .iter()
-        .filter(|s| true_range(s.t_ns).unwrap_or(s.range_m) <= 1.0)
+        .filter(|s| true_range(s.index).unwrap_or(s.range_m) <= 1.0)
         .collect();
     let frac = |v: &[&BarSample]| {
         if v.is_empty() {

@@ -58,6 +58,9 @@ pub struct IdentifyConfig {
     /// Image-evidence check: radius around a predicted LED at the labelled LEDs (pixels); it grows
     /// with the extrapolation distance.
     pub image_match_px: f64,
+    /// Largest common scale error (either way) under which a three-LED labelling's "twin" triple
+    /// is still considered a rival; such labellings need continuity.
+    pub twin_scale_max: f64,
     /// Two-LED labellings are refused when a labelled blob pairs with another blob with an
     /// epipolar distance smaller by more than this, pixels.
     pub competitor_margin_px: f64,
@@ -127,6 +130,7 @@ impl Default for IdentifyConfig {
             max_candidates: 24,
             ambiguity_sigmas: 4.0,
             competitor_margin_px: 1.0,
+            twin_scale_max: 2.0,
             image_line_px: 2.5,
             image_cross_ratio_tolerance: 0.1,
             accept_sigmas: 3.0,
@@ -218,6 +222,10 @@ struct Hypothesis {
     distance_rms: f64,
     /// The mirrored labelling of the same points is also consistent within the noise.
     needs_prior: bool,
+    /// Three LEDs whose spacing ratio is also that of another LED triple ("twin"): only the
+    /// absolute scale separates them, and timing/motion errors of unsynchronised cameras can
+    /// stretch it, so the labelling is accepted only when continuity confirms it.
+    needs_continuity: bool,
     /// Consistent within the wide (ambiguity) band but either not within the acceptance band or
     /// another same-direction labelling of its points fits as well: never accepted, yet it still
     /// counts as a rival of conflicting labellings.
@@ -446,6 +454,9 @@ impl Identifier {
             .max()
             .ok_or(IdentifyError::NoConsistentSet)?;
         let (chosen, resolution) = self.choose(cands, best_size, prior)?;
+        if chosen.needs_continuity && !self.continuity_confirms(cands, &chosen, prior) {
+            return Err(IdentifyError::Ambiguous);
+        }
         if self.has_conflicting_rival(cands, &chosen, prior) {
             return Err(IdentifyError::Ambiguous);
         }
@@ -571,8 +582,10 @@ impl Identifier {
         if size == 4 && !self.cross_ratio_ok(&pts) {
             return None;
         }
+        let twin = size == 3 && self.has_scaled_twin(cands, &assignment);
         Some(Hypothesis {
             needs_prior: mirrored,
+            needs_continuity: twin,
             refused: shifted || !tight,
             assignment,
             size,
@@ -650,6 +663,72 @@ impl Identifier {
             }
         }
         (shifted, mirrored)
+    }
+
+    /// True when another three-LED labelling of the same ordered points (same direction) fits the
+    /// measured distances up to a common scale factor within `[1 / twin_scale_max,
+    /// twin_scale_max]`, each distance within the acceptance band (`accept_sigmas`). The pen's triples come in
+    /// near-twins ({1,2,4} vs {2,3,4}: 70:90 vs 40:50; {1,2,3} vs {1,3,4}: 70:40 vs 110:50), so a
+    /// scale error (depth error from motion between unsynchronised exposures) turns one into the
+    /// other while every ratio still fits.
+    fn has_scaled_twin(
+        &self,
+        cands: &[Candidate],
+        assignment: &[Option<usize>; LED_COUNT],
+    ) -> bool {
+        let labelled: Vec<(usize, &Candidate)> = assignment
+            .iter()
+            .enumerate()
+            .filter_map(|(i, k)| k.map(|k| (i, &cands[k])))
+            .collect();
+        if labelled.len() != 3 {
+            return false;
+        }
+        let l = &self.pen.led_offsets;
+        let pairs = [(0, 1), (1, 2), (0, 2)];
+        let measured = pairs.map(|(a, b)| (labelled[a].1.point - labelled[b].1.point).norm());
+        let bands = pairs
+            .map(|(a, b)| self.band_at(labelled[a].1, labelled[b].1, self.config.accept_sigmas));
+        let max_scale = self.config.twin_scale_max;
+        (0u8..16)
+            .filter(|s| s.count_ones() == 3)
+            .map(|s| {
+                (0..LED_COUNT)
+                    .filter(|i| s & (1 << i) != 0)
+                    .collect::<Vec<_>>()
+            })
+            .filter(|labels| (0..3).any(|j| labels[j] != labelled[j].0))
+            .any(|labels| {
+                let alt = pairs.map(|(a, b)| (l[labels[a]] - l[labels[b]]).abs());
+                let aa: f64 = alt.iter().map(|a| a * a).sum();
+                let da: f64 = alt.iter().zip(&measured).map(|(a, d)| a * d).sum();
+                let scale = da / aa.max(1e-12);
+                scale.is_finite()
+                    && scale * max_scale >= 1.0
+                    && scale <= max_scale
+                    && (0..3).all(|k| (measured[k] - scale * alt[k]).abs() <= bands[k])
+            })
+    }
+
+    /// True when the previous frame's LED positions confirm the labelling: at least one labelled
+    /// LED was seen recently and none moved more than `continuity_max_jump`.
+    fn continuity_confirms(
+        &self,
+        cands: &[Candidate],
+        h: &Hypothesis,
+        prior: &IdentifyPrior,
+    ) -> bool {
+        let pts = labelled_points(cands, &h.assignment);
+        let mut compared = false;
+        for (p, q) in pts.iter().zip(prior.previous.iter()) {
+            if let (Some(p), Some(q)) = (p, q) {
+                if (p - q).norm() > self.config.continuity_max_jump {
+                    return false;
+                }
+                compared = true;
+            }
+        }
+        compared
     }
 
     fn cross_ratio_ok(&self, pts: &[Option<Vector3<f64>>; LED_COUNT]) -> bool {
@@ -999,7 +1078,7 @@ mod tests {
                 let (c, truth, pose) = scene(&mut rng, mask, 0, 0.0007);
                 let prior = IdentifyPrior {
                     direction: Some(pose.direction()),
-                    ..Default::default()
+                    previous: continuity_for_triples(mask, &pose),
                 };
                 let r = id.identify(&c, &prior).unwrap();
                 assert_eq!(r.mask(), mask);
@@ -1008,8 +1087,19 @@ mod tests {
         }
     }
 
+    /// Previous LED positions (continuity) for three-LED masks, whose twin triples need them.
+    fn continuity_for_triples(mask: u8, pose: &PenPose) -> [Option<Vector3<f64>>; LED_COUNT] {
+        if mask.count_ones() == 3 {
+            PenGeometry::thesis()
+                .led_positions(&pose.led1, &pose.rotation)
+                .map(Some)
+        } else {
+            [None; LED_COUNT]
+        }
+    }
+
     #[test]
-    fn two_leds_without_prior_are_refused_and_three_are_not() {
+    fn two_leds_without_prior_are_refused_and_three_need_continuity() {
         let mut rng = SplitMix64::new(3);
         let mut id = Identifier::new(PenGeometry::thesis(), IdentifyConfig::default()).unwrap();
         let (c, _, _) = scene(&mut rng, 0b0101, 0, 0.0);
@@ -1017,12 +1107,23 @@ mod tests {
             id.identify(&c, &IdentifyPrior::default()),
             Err(IdentifyError::Ambiguous)
         );
-        let (c, truth, _) = scene(&mut rng, 0b1101, 0, 0.0);
-        let r = id.identify(&c, &IdentifyPrior::default()).unwrap();
-        assert_eq!(
-            (r.count(), wrong_labels(&r, &truth), r.resolution),
-            (3, 0, Resolution::Geometry)
-        );
+        // {1,2,4} (70:90) and {2,3,4} (40:50) are twins up to scale: without continuity a scale
+        // error could swap them, so the frame is refused, even with the direction prior (twins
+        // point the same way). ({1,2,3} vs {1,3,4} differ by more than the band here.)
+        for mask in [0b1011u8, 0b1110] {
+            let (c, truth, pose) = scene(&mut rng, mask, 0, 0.0);
+            let direction = IdentifyPrior {
+                direction: Some(pose.direction()),
+                ..Default::default()
+            };
+            assert_eq!(id.identify(&c, &direction), Err(IdentifyError::Ambiguous));
+            let continuity = IdentifyPrior {
+                direction: None,
+                previous: continuity_for_triples(mask, &pose),
+            };
+            let r = id.identify(&c, &continuity).unwrap();
+            assert_eq!((r.count(), wrong_labels(&r, &truth)), (3, 0));
+        }
         // Continuity alone also resolves the two-LED case.
         let (c, truth, pose) = scene(&mut rng, 0b0011, 0, 0.0);
         let leds = PenGeometry::thesis().led_positions(&pose.led1, &pose.rotation);
@@ -1063,7 +1164,7 @@ mod tests {
                     let (c, truth, pose) = scene(&mut rng, mask, spurious, 0.0007);
                     let prior = IdentifyPrior {
                         direction: Some(pose.direction()),
-                        ..Default::default()
+                        previous: continuity_for_triples(mask, &pose),
                     };
                     frames += 1;
                     if let Ok(r) = id.identify(&c, &prior) {
