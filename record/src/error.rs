@@ -6,22 +6,22 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
     /// An I/O error on a file.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause (shown in the message, so not also exposed as the error source).
+        cause: std::io::Error,
     },
     /// A JSON document or JSON line that does not parse.
-    #[error("{path}:{line}: {source}")]
+    #[error("{path}:{line}: {cause}")]
     Json {
         /// The file.
         path: PathBuf,
         /// 1-based line number (1 for whole-file JSON).
         line: usize,
-        /// The cause.
-        source: serde_json::Error,
+        /// The cause (shown in the message, so not also exposed as the error source).
+        cause: serde_json::Error,
     },
     /// `meta.json` is not a FIRES recording.
     #[error("{path}: format is {found:?}, expected \"fires-recording\"")]
@@ -91,10 +91,10 @@ pub enum RecordError {
 
 impl RecordError {
     /// Wraps an I/O error with its file.
-    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    pub fn io(path: impl Into<PathBuf>, cause: std::io::Error) -> Self {
         RecordError::Io {
             path: path.into(),
-            source,
+            cause,
         }
     }
 }

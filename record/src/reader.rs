@@ -25,7 +25,7 @@ fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, RecordError> {
     serde_json::from_slice(&bytes).map_err(|e| RecordError::Json {
         path: path.to_path_buf(),
         line: e.line(),
-        source: e,
+        cause: e,
     })
 }
 
@@ -39,7 +39,7 @@ fn read_jsonl<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>, RecordError> {
         let v = serde_json::from_slice(line).map_err(|e| RecordError::Json {
             path: path.to_path_buf(),
             line: i + 1,
-            source: e,
+            cause: e,
         })?;
         out.push(v);
     }

@@ -33,7 +33,7 @@ impl Out {
         let mut line = serde_json::to_vec(value).map_err(|e| RecordError::Json {
             path: self.path.clone(),
             line: 0,
-            source: e,
+            cause: e,
         })?;
         line.push(b'\n');
         self.write(&line)
@@ -57,7 +57,7 @@ fn write_json_file<T: Serialize>(path: PathBuf, value: &T) -> Result<(), RecordE
     let mut text = serde_json::to_vec_pretty(value).map_err(|e| RecordError::Json {
         path: path.clone(),
         line: 0,
-        source: e,
+        cause: e,
     })?;
     text.push(b'\n');
     fs::write(&path, text).map_err(|e| RecordError::io(&path, e))

@@ -56,6 +56,9 @@ impl Default for PostprocessConfig {
     }
 }
 
+/// Most points [`BSpline::resample`] returns.
+pub const MAX_RESAMPLED: usize = 100_000;
+
 /// Sampling, spline fit and resampling with uniform weights.
 pub fn postprocess(
     points: &[[f64; 3]],
@@ -248,7 +251,8 @@ impl BSpline {
             cum[i] = cum[i - 1] + (pts[i] - pts[i - 1]).norm();
         }
         let total = cum[cum.len() - 1];
-        let count = ((total / spacing.max(1e-9)).ceil() as usize).max(1);
+        // Bounded output whatever the input: a stroke of 200 m at 2 mm spacing, far beyond any real one.
+        let count = ((total / spacing.max(1e-9)).ceil().min(MAX_RESAMPLED as f64) as usize).max(1);
         let mut out = Vec::with_capacity(count + 1);
         let mut seg = 0;
         for j in 0..=count {

@@ -23,6 +23,13 @@ pub struct DeadReckonConfig {
     pub beta: f64,
     /// Integrate the IMU's linear acceleration while occluded.
     pub use_accelerometer: bool,
+    /// Fastest tip speed believed, m/s; faster velocity estimates are clamped (a hand-held pen).
+    pub max_speed_mps: f64,
+    /// A vision tip farther than this from the prediction restarts the tracker instead of updating its
+    /// velocity (a re-acquisition, not motion), metres.
+    pub max_innovation_m: f64,
+    /// Farthest an extrapolated tip may move from the last vision tip before it is given up, metres.
+    pub max_drift_m: f64,
 }
 
 impl Default for DeadReckonConfig {
@@ -33,6 +40,9 @@ impl Default for DeadReckonConfig {
             alpha: 0.6,
             beta: 0.3,
             use_accelerometer: true,
+            max_speed_mps: 3.0,
+            max_innovation_m: 0.05,
+            max_drift_m: 0.05,
         }
     }
 }
@@ -47,6 +57,7 @@ pub struct TipDeadReckoner {
     velocity: Vector3<f64>,
     t_ns: u64,
     last_seen_ns: u64,
+    last_seen: Vector3<f64>,
 }
 
 impl TipDeadReckoner {
@@ -59,6 +70,7 @@ impl TipDeadReckoner {
             velocity: Vector3::zeros(),
             t_ns: 0,
             last_seen_ns: 0,
+            last_seen: Vector3::zeros(),
         }
     }
 
@@ -74,8 +86,16 @@ impl TipDeadReckoner {
                 let dt = (t_ns - self.t_ns) as f64 * 1e-9;
                 let predicted = p + self.velocity * dt;
                 let r = tip - predicted;
-                self.position = Some(predicted + r * self.config.alpha);
-                self.velocity += r * (self.config.beta / dt);
+                if r.norm() > self.config.max_innovation_m {
+                    self.position = Some(*tip);
+                    self.velocity = Vector3::zeros();
+                } else {
+                    self.position = Some(predicted + r * self.config.alpha);
+                    self.velocity = clamp_norm(
+                        self.velocity + r * (self.config.beta / dt),
+                        self.config.max_speed_mps,
+                    );
+                }
             }
             _ => {
                 self.position = Some(*tip);
@@ -84,6 +104,7 @@ impl TipDeadReckoner {
         }
         self.t_ns = t_ns.max(self.t_ns);
         self.last_seen_ns = self.t_ns;
+        self.last_seen = *tip;
     }
 
     /// Advances through an occlusion with one IMU sample (world-from-pen orientation `q`);
@@ -106,7 +127,13 @@ impl TipDeadReckoner {
             let linear = q * Vector3::from(sample.accel) - self.world.up() * self.world.gravity;
             v += linear * dt;
         }
+        let v = clamp_norm(v, self.config.max_speed_mps);
         let next = p + (self.velocity + v) * (0.5 * dt);
+        if (next - self.last_seen).norm() > self.config.max_drift_m {
+            // Bounded drift: past this the extrapolation is a guess, not a measurement.
+            self.position = None;
+            return None;
+        }
         self.velocity = v;
         self.position = Some(next);
         self.t_ns = sample.t_ns;
@@ -122,6 +149,16 @@ impl TipDeadReckoner {
     /// True when the last tip came from vision at `t_ns`.
     pub fn seen_at(&self, t_ns: u64) -> bool {
         self.last_seen_ns == t_ns && self.position.is_some()
+    }
+}
+
+/// `v` scaled down to at most `max` in length.
+fn clamp_norm(v: Vector3<f64>, max: f64) -> Vector3<f64> {
+    let n = v.norm();
+    if n > max && n > 0.0 {
+        v * (max / n)
+    } else {
+        v
     }
 }
 
@@ -169,5 +206,37 @@ mod tests {
             ..rest
         };
         assert!(dr.propagate(&late, Some(&q)).is_none());
+    }
+
+    #[test]
+    fn a_jump_in_vision_restarts_instead_of_becoming_velocity_and_drift_is_bounded() {
+        let world = WorldReference::default();
+        let mut dr = TipDeadReckoner::new(DeadReckonConfig::default(), world);
+        let q = UnitQuaternion::identity();
+        let at_rest = |t_ns| ImuSample {
+            t_ns,
+            accel: (world.up() * world.gravity).into(),
+            gyro: [0.0; 3],
+            mag: [0.0, 1.0, 0.0],
+        };
+        let p0 = Vector3::new(0.1, 0.0, 0.5);
+        dr.observe(0, &p0);
+        // A mislabelled frame 2 m away, 1 ms later: a re-acquisition, not 2000 m/s.
+        let p1 = p0 + Vector3::new(2.0, 0.0, 0.0);
+        dr.observe(1_000_000, &p1);
+        let p = dr
+            .propagate(&at_rest(100_000_000), Some(&q))
+            .expect("within the time limit");
+        assert!((p - p1).norm() < 1e-3, "{p:?}");
+        // A wrong orientation makes gravity look like 1 g of acceleration: it is given up at 5 cm, not 0.3 s.
+        let tilted = UnitQuaternion::from_euler_angles(std::f64::consts::FRAC_PI_2, 0.0, 0.0);
+        let mut gave_up = false;
+        for k in 1..=30u64 {
+            match dr.propagate(&at_rest(100_000_000 + k * 10_000_000), Some(&tilted)) {
+                Some(p) => assert!((p - p1).norm() <= 0.05 + 1e-9),
+                None => gave_up = true,
+            }
+        }
+        assert!(gave_up);
     }
 }
