@@ -2,8 +2,10 @@
 //! (architecture.md §1). The `fires` binary (src/main.rs) is a thin command-line layer over it.
 
 pub mod calibrate;
+pub mod capture;
 pub mod clock;
 pub mod link;
+pub mod live;
 pub mod replay;
 pub mod stereo;
 pub mod stroke;

@@ -33,6 +33,8 @@ enum Command {
     Bench(cli::bench::BenchArgs),
     /// Simulate a pen session (pen, IMU, link, cameras) into a recording with ground truth.
     Sim(cli::sim::SimArgs),
+    /// Track live: two cameras and the pen's serial port until Ctrl-C (needs the `camera` feature).
+    Track(cli::track::TrackArgs),
     /// Calibrate the stereo rig from chessboard image pairs (needs the `opencv` feature).
     Calibrate(cli::calibrate::CalibrateArgs),
 }
@@ -46,6 +48,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => cli::bench::run(args),
         Command::Sim(args) => cli::sim::run(args),
         Command::Calibrate(args) => cli::calibrate::run(args),
+        Command::Track(args) => cli::track::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -6,3 +6,4 @@ pub mod decode;
 pub mod demo;
 pub mod replay;
 pub mod sim;
+pub mod track;

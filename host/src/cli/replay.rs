@@ -1,11 +1,13 @@
 //! `fires replay REC_DIR --out OUT_DIR`: a recording through the tracker; writes strokes.json, track.csv,
-//! report.json (with accuracy figures when the recording has ground truth).
+//! report.json (with accuracy figures when the recording has ground truth) and then tip_error.png, the tip
+//! error over time of the vision-tracked samples (its scale is in report.json's `tip_error_plot`).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use fires_host::replay::report::accuracy;
+use fires_host::replay::plot::tip_error_png;
+use fires_host::replay::report::{accuracy, tip_errors};
 use fires_host::replay::{replay, ReplayConfig, ReplayOutput};
 use fires_host::track::pipeline::TrackQuality;
 use fires_record::RecordingReader;
@@ -46,7 +48,17 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<serde_json::Value> {
         &serde_json::json!({ "strokes": out.strokes }),
     )?;
     write_track_csv(&args.out.join("track.csv"), &out)?;
-    let report = report(&reader, &out, &args.fusion)?;
+    let mut report = report(&reader, &out, &args.fusion)?;
+    if let Some(truth) = reader.exposure_truth()? {
+        let t0 = out.samples.first().map_or(0, |s| s.t_ns);
+        let points: Vec<(f64, f64)> = tip_errors(&out, &truth)
+            .into_iter()
+            .map(|(t, e)| (t.saturating_sub(t0) as f64 / 1e9, e * 1e3))
+            .collect();
+        let path = args.out.join("tip_error.png");
+        let scale = tip_error_png(&path, &points)?;
+        report["tip_error_plot"] = serde_json::json!({ "path": path, "scale": scale });
+    }
     write_json(&args.out.join("report.json"), &report)?;
     Ok(report)
 }

@@ -9,6 +9,7 @@
 
 pub mod bar;
 pub mod imu_stream;
+pub mod plot;
 pub mod report;
 pub mod rig;
 pub mod run;

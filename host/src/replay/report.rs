@@ -112,6 +112,22 @@ pub fn label_errors(out: &ReplayOutput, truth: &[ExposureTruth]) -> (usize, usiz
     (wrong, checked)
 }
 
+/// Tip error of every vision-tracked sample that has truth: (sample time ns, error metres), in sample order.
+pub fn tip_errors(out: &ReplayOutput, truth: &[ExposureTruth]) -> Vec<(u64, f64)> {
+    let mut left_truth: Vec<&ExposureTruth> = truth.iter().filter(|e| e.camera == 0).collect();
+    left_truth.sort_by_key(|e| e.exposure_time_ns);
+    out.samples
+        .iter()
+        .filter_map(|s| match (s.tip, s.quality) {
+            (Some(tip), TrackQuality::Vision { .. }) => {
+                let (tip_true, _) = truth_at(&left_truth, s.t_ns)?;
+                Some((s.t_ns, dist(&tip, &tip_true)))
+            }
+            _ => None,
+        })
+        .collect()
+}
+
 /// Tip accuracy and label correctness of the replay against exposure truth (world = left camera frame).
 pub fn accuracy(out: &ReplayOutput, truth: &[ExposureTruth]) -> Accuracy {
     let mut left_truth: Vec<&ExposureTruth> = truth.iter().filter(|e| e.camera == 0).collect();
