@@ -15,7 +15,7 @@
 use embedded_hal_async::delay::DelayNs;
 
 use super::bus::RegisterBus;
-use super::{axes_le, axes_mean, axes_sub, Axes, SensorError};
+use super::{axes_le, axes_sub, Axes, SensorError};
 
 /// 7-bit I2C address with SDO high (the FIRES board).
 pub const I2C_ADDRESS: u8 = 0x69;
@@ -55,7 +55,6 @@ pub const SELF_TEST_TYPICAL_COUNTS: i16 = 7571;
 pub const SELF_TEST_MIN_COUNTS: i16 = SELF_TEST_TYPICAL_COUNTS / 2;
 /// Largest accepted self-test change per axis, counts (150 % of typical).
 pub const SELF_TEST_MAX_COUNTS: i16 = SELF_TEST_TYPICAL_COUNTS / 2 * 3;
-const SELF_TEST_SAMPLES: usize = 2;
 const SETTLE_MS: u32 = 60;
 
 /// The gyroscope.
@@ -128,12 +127,7 @@ impl<B: RegisterBus> L3g4200d<B> {
     }
 
     async fn mean<D: DelayNs>(&mut self, delay: &mut D) -> Result<Axes, SensorError<B::Error>> {
-        let mut s = [[0i16; 3]; SELF_TEST_SAMPLES];
-        for slot in s.iter_mut() {
-            *slot = self.read().await?;
-            delay.delay_ms(10).await;
-        }
-        Ok(axes_mean(&s))
+        super::mean_le_axes(&mut self.bus, reg::OUT_X_L, delay).await
     }
 }
 

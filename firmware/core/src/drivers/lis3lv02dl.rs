@@ -14,7 +14,7 @@
 use embedded_hal_async::delay::DelayNs;
 
 use super::bus::RegisterBus;
-use super::{axes_le, axes_mean, axes_sub, Axes, SensorError};
+use super::{axes_le, axes_sub, Axes, SensorError};
 
 /// 7-bit I2C address.
 pub const I2C_ADDRESS: u8 = 0x1D;
@@ -54,7 +54,6 @@ pub const SELF_TEST_MIN_COUNTS: i16 = 100;
 /// Largest accepted self-test change per axis, counts (about 1.2 g).
 pub const SELF_TEST_MAX_COUNTS: i16 = 1200;
 /// Readings averaged in each self-test phase.
-const SELF_TEST_SAMPLES: usize = 2;
 /// Settling time after a mode change, ms (several 160 Hz periods).
 const SETTLE_MS: u32 = 50;
 
@@ -130,12 +129,7 @@ impl<B: RegisterBus> Lis3lv02dl<B> {
     }
 
     async fn mean<D: DelayNs>(&mut self, delay: &mut D) -> Result<Axes, SensorError<B::Error>> {
-        let mut s = [[0i16; 3]; SELF_TEST_SAMPLES];
-        for slot in s.iter_mut() {
-            *slot = self.read().await?;
-            delay.delay_ms(10).await;
-        }
-        Ok(axes_mean(&s))
+        super::mean_le_axes(&mut self.bus, reg::OUTX_L, delay).await
     }
 }
 

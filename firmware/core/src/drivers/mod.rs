@@ -95,3 +95,23 @@ pub(crate) async fn check_identity<B: bus::RegisterBus>(
         Err(SensorError::WrongId { expected, found })
     }
 }
+
+/// Samples averaged per self-test phase (both parts with a self-test use the same count).
+pub(crate) const SELF_TEST_SAMPLES: usize = 2;
+
+/// Mean of [`SELF_TEST_SAMPLES`] little-endian x, y, z readings from the six output registers at `first`,
+/// 10 ms apart (one output period): the baseline and excited phases of a self-test.
+pub(crate) async fn mean_le_axes<B: bus::RegisterBus, D: embedded_hal_async::delay::DelayNs>(
+    bus: &mut B,
+    first: u8,
+    delay: &mut D,
+) -> Result<Axes, SensorError<B::Error>> {
+    let mut s = [[0i16; 3]; SELF_TEST_SAMPLES];
+    for slot in s.iter_mut() {
+        let mut b = [0u8; 6];
+        bus.read_registers(first, &mut b).await?;
+        *slot = axes_le(&b);
+        delay.delay_ms(10).await;
+    }
+    Ok(axes_mean(&s))
+}
