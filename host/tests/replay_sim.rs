@@ -89,8 +89,10 @@ fn the_bar_is_measured_near_its_length() {
 
 #[test]
 fn a_stress_session_never_accepts_a_wrong_label() {
-    for seed in [1, 2] {
-        let dir = simulate("stress", 8.0, seed);
+    // Seed 4 moves the pen about one LED spacing per frame along its axis early on: blob velocities
+    // from nearest neighbours aliased there and accepted 3 wrong labels in the first 5 s.
+    for (seed, seconds) in [(1, 8.0), (2, 8.0), (4, 5.0)] {
+        let dir = simulate("stress", seconds, seed);
         let reader = RecordingReader::open(&dir).expect("open");
         let out = replay(&reader, &ReplayConfig::default()).expect("replay");
         let truth = reader.exposure_truth().expect("truth").expect("simulated");

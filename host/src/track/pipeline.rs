@@ -189,16 +189,36 @@ impl TrackSample {
     }
 }
 
+/// One camera frame kept for time alignment: time, blob centres and, once a vision sample labelled
+/// it, the blob index of every LED.
+#[derive(Debug, Clone, Default)]
+struct KeptFrame {
+    t_ns: u64,
+    blobs: Vec<[f64; 2]>,
+    labels: [Option<usize>; LED_COUNT],
+}
+
 #[derive(Debug, Clone, Default)]
 struct CameraHistory {
-    current: Option<(u64, Vec<[f64; 2]>)>,
-    previous: Option<(u64, Vec<[f64; 2]>)>,
+    current: Option<KeptFrame>,
+    previous: Option<KeptFrame>,
 }
 
 impl CameraHistory {
     fn push(&mut self, t_ns: u64, blobs: Vec<[f64; 2]>) {
         self.previous = self.current.take();
-        self.current = Some((t_ns, blobs));
+        self.current = Some(KeptFrame {
+            t_ns,
+            blobs,
+            labels: [None; LED_COUNT],
+        });
+    }
+
+    /// Records which blob of the current frame is which LED.
+    fn label_current(&mut self, labels: [Option<usize>; LED_COUNT]) {
+        if let Some(f) = &mut self.current {
+            f.labels = labels;
+        }
     }
 }
 
@@ -242,6 +262,9 @@ pub struct Tracker {
     aligned_velocity: Vec<Option<[f64; 2]>>,
     clock: ClockOffsetEstimator,
     previous_leds: (u64, [Option<Vector3<f64>>; LED_COUNT]),
+    /// All four LED positions of the newest and the one older vision pose, for predicting where
+    /// the LEDs appear in a frame that no vision sample labelled.
+    pen_history: [Option<(u64, [Vector3<f64>; LED_COUNT])>; 2],
     last_vision_ns: Option<u64>,
     occluded: bool,
 }
@@ -278,6 +301,7 @@ impl Tracker {
             aligned_velocity: Vec::new(),
             clock: ClockOffsetEstimator::default(),
             previous_leds: (0, [None; LED_COUNT]),
+            pen_history: [None; 2],
             last_vision_ns: None,
             occluded: false,
             config,
@@ -330,7 +354,7 @@ impl Tracker {
             CameraId::Right => (1, 0),
         };
         self.cameras[this].push(t, frame.blobs);
-        let t_other = self.cameras[other].current.as_ref()?.0;
+        let t_other = self.cameras[other].current.as_ref()?.t_ns;
         if t.abs_diff(t_other) > self.config.max_pair_dt_ns {
             return None;
         }
@@ -420,27 +444,20 @@ impl Tracker {
         let other = 1 - this;
         self.aligned.clear();
         self.aligned_velocity.clear();
-        if let Some((t_o, blobs)) = &self.cameras[other].current {
-            self.aligned.extend_from_slice(blobs);
-            self.aligned_velocity.resize(blobs.len(), None);
-            if self.config.time_align {
-                if let Some((t_p, prev)) = &self.cameras[other].previous {
-                    let times = (*t_p, *t_o, t);
-                    let max_px = self.config.max_blob_motion_px;
-                    align_blobs(
-                        &mut self.aligned,
-                        &mut self.aligned_velocity,
-                        prev,
-                        times,
-                        max_px,
-                    );
-                }
+        if let Some(cur) = &self.cameras[other].current {
+            self.aligned.extend_from_slice(&cur.blobs);
+            self.aligned_velocity.resize(cur.blobs.len(), None);
+        }
+        if self.config.time_align {
+            for (i, moved, v) in self.alignment(other, t) {
+                self.aligned[i] = moved;
+                self.aligned_velocity[i] = Some(v);
             }
         }
         let own: &[[f64; 2]] = self.cameras[this]
             .current
             .as_ref()
-            .map_or(&[], |(_, b)| b.as_slice());
+            .map_or(&[], |f| f.blobs.as_slice());
         let (l_px, r_px): (&[[f64; 2]], &[[f64; 2]]) = if this == 0 {
             (own, &self.aligned)
         } else {
@@ -448,6 +465,112 @@ impl Tracker {
         };
         undistort_all(&self.rig.left, l_px, &mut self.left_norm);
         undistort_all(&self.rig.right, r_px, &mut self.right_norm);
+    }
+
+    /// Where the other camera's current blobs would be at `t`: (blob index, moved position,
+    /// image velocity in pixels per nanosecond) for every blob whose LED is known. The velocity is
+    /// measured between the same LED's blobs in the previous and current frame of that camera;
+    /// without a previous blob it is the predicted pen motion projected into the image.
+    ///
+    /// Blobs are matched by LED identity (labels of earlier vision samples, or the predicted LED
+    /// images), never by nearest neighbour: at 15-30 frames/s a fast pen moves about one LED
+    /// spacing per frame, a nearest-neighbour velocity then aliases to the neighbouring LED, and
+    /// the whole pen shifts by one LED into a consistent but wrongly labelled configuration.
+    fn alignment(&self, other: usize, t: u64) -> Vec<(usize, [f64; 2], [f64; 2])> {
+        let history = &self.cameras[other];
+        let Some(cur) = &history.current else {
+            return Vec::new();
+        };
+        let camera = if other == 0 {
+            CameraId::Left
+        } else {
+            CameraId::Right
+        };
+        let cur_ids = self.frame_identities(camera, cur);
+        let prev = history
+            .previous
+            .as_ref()
+            .filter(|p| p.t_ns < cur.t_ns && cur.t_ns - p.t_ns <= 100_000_000);
+        let prev_ids = prev.map(|p| self.frame_identities(camera, p));
+        let shift = t as f64 - cur.t_ns as f64;
+        let project_at = |tt: u64, k: usize| {
+            let p = self.predicted_leds(tt)?[k];
+            self.rig.project(camera, &p).ok()
+        };
+        let mut out = Vec::new();
+        for (k, id) in cur_ids.iter().enumerate() {
+            let Some(i) = *id else { continue };
+            let b = cur.blobs[i];
+            let measured = prev.zip(prev_ids).and_then(|(p, ids)| {
+                let q = p.blobs[ids[k]?];
+                let dt = (cur.t_ns - p.t_ns) as f64;
+                ((b[0] - q[0]).hypot(b[1] - q[1]) <= self.config.max_blob_motion_px)
+                    .then(|| [(b[0] - q[0]) / dt, (b[1] - q[1]) / dt])
+            });
+            let v = measured.or_else(|| {
+                let (a, c) = (project_at(cur.t_ns, k)?, project_at(t, k)?);
+                (shift != 0.0).then(|| [(c[0] - a[0]) / shift, (c[1] - a[1]) / shift])
+            });
+            if let Some(v) = v {
+                out.push((i, [b[0] + v[0] * shift, b[1] + v[1] * shift], v));
+            }
+        }
+        out
+    }
+
+    /// Blob index of every LED in a frame: its labels when a vision sample labelled it, otherwise
+    /// the blob nearest each predicted LED image, accepted only when it is unambiguous (within a
+    /// third of the smallest predicted LED spacing, and alone there).
+    fn frame_identities(&self, camera: CameraId, frame: &KeptFrame) -> [Option<usize>; LED_COUNT] {
+        if frame.labels.iter().any(Option::is_some) {
+            return frame.labels;
+        }
+        let mut ids = [None; LED_COUNT];
+        let Some(leds) = self.predicted_leds(frame.t_ns) else {
+            return ids;
+        };
+        let Ok(px) = leds
+            .iter()
+            .map(|p| self.rig.project(camera, p))
+            .collect::<Result<Vec<_>, _>>()
+        else {
+            return ids;
+        };
+        let mut spacing = self.config.max_blob_motion_px;
+        for (a, pa) in px.iter().enumerate() {
+            for pb in &px[a + 1..] {
+                spacing = spacing.min((pa[0] - pb[0]).hypot(pa[1] - pb[1]));
+            }
+        }
+        let gate = spacing / 3.0;
+        for (k, p) in px.iter().enumerate() {
+            let mut near = frame
+                .blobs
+                .iter()
+                .enumerate()
+                .filter(|(_, b)| (b[0] - p[0]).hypot(b[1] - p[1]) <= gate);
+            if let (Some((i, _)), None) = (near.next(), near.next()) {
+                ids[k] = Some(i);
+            }
+        }
+        ids
+    }
+
+    /// All four LED positions at `t` from the last two vision poses (constant velocity), or None
+    /// without a recent pose.
+    fn predicted_leds(&self, t: u64) -> Option<[Vector3<f64>; LED_COUNT]> {
+        let (t1, p1) = self.pen_history[0]?;
+        if t.abs_diff(t1) > self.config.continuity_ns {
+            return None;
+        }
+        let dt = (t as f64 - t1 as f64) * 1e-9;
+        let velocity = |k: usize| match self.pen_history[1] {
+            Some((t0, p0)) if t1 > t0 && t1 - t0 <= 100_000_000 => {
+                (p1[k] - p0[k]) / ((t1 - t0) as f64 * 1e-9)
+            }
+            _ => Vector3::zeros(),
+        };
+        Some(std::array::from_fn(|k| p1[k] + velocity(k) * dt))
     }
 
     fn fused_direction(&self, t: u64) -> Option<Vector3<f64>> {
@@ -579,6 +702,11 @@ impl Tracker {
         };
         self.last_vision_ns = Some(t);
         self.previous_leds = (t, id.points);
+        if let Some(c) = self.tip.pattern_centroid(estimate.pattern) {
+            let l = self.config.pen.led_offsets;
+            let all = l.map(|lk| estimate.centroid + estimate.direction * (c - lk));
+            self.pen_history = [Some((t, all)), self.pen_history[0]];
+        }
         self.reckoner.observe(t, &estimate.tip);
         self.occluded = false;
         let fused_axis = self.config.direction_source == DirectionSource::Fused
@@ -591,6 +719,28 @@ impl Tracker {
             estimate.tip
         };
         let cands = &self.correspondences.candidates;
+        let (own, other) = (
+            id.assignment.map(|a| {
+                a.map(|k| {
+                    if this == 0 {
+                        cands[k].left
+                    } else {
+                        cands[k].right
+                    }
+                })
+            }),
+            id.assignment.map(|a| {
+                a.map(|k| {
+                    if this == 0 {
+                        cands[k].right
+                    } else {
+                        cands[k].left
+                    }
+                })
+            }),
+        );
+        self.cameras[this].label_current(own);
+        self.cameras[1 - this].label_current(other);
         TrackSample {
             t_ns: t,
             tip: Some(tip.into()),
@@ -630,41 +780,6 @@ fn undistort_all(cam: &crate::stereo::CameraIntrinsics, px: &[[f64; 2]], out: &m
         px.iter()
             .map(|p| cam.undistort(*p).unwrap_or([f64::NAN, f64::NAN])),
     );
-}
-
-/// Moves each blob of the frame at `t_cur` to `t_target` with the velocity from its unambiguous
-/// nearest neighbour in the frame at `t_prev` (`times = (t_prev, t_cur, t_target)`), recording the
-/// velocity (pixels per nanosecond); blobs without one stay where they are.
-fn align_blobs(
-    blobs: &mut [[f64; 2]],
-    velocity: &mut [Option<[f64; 2]>],
-    prev: &[[f64; 2]],
-    times: (u64, u64, u64),
-    max_px: f64,
-) {
-    let (t_prev, t_cur, t_target) = times;
-    if t_cur <= t_prev || t_cur - t_prev > 100_000_000 {
-        return;
-    }
-    let dt = (t_cur - t_prev) as f64;
-    let shift = t_target as f64 - t_cur as f64;
-    for (b, vel) in blobs.iter_mut().zip(velocity.iter_mut()) {
-        let mut best = (f64::INFINITY, f64::INFINITY, [0.0; 2]);
-        for p in prev {
-            let d = (b[0] - p[0]).hypot(b[1] - p[1]);
-            if d < best.0 {
-                best = (d, best.0, *p);
-            } else if d < best.1 {
-                best.1 = d;
-            }
-        }
-        let (d, second, p) = best;
-        if d <= max_px && second > 2.0 * d.max(1.0) {
-            let v = [(b[0] - p[0]) / dt, (b[1] - p[1]) / dt];
-            *b = [b[0] + v[0] * shift, b[1] + v[1] * shift];
-            *vel = Some(v);
-        }
-    }
 }
 
 /// Online estimate of the residual right-camera clock offset. With the time-aligned blobs, a
