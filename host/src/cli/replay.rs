@@ -65,25 +65,32 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<serde_json::Value> {
 
 /// A two-LED recording is the bar experiment: lengths instead of a pen track.
 fn bar_to_dir(reader: &RecordingReader, args: &ReplayArgs) -> anyhow::Result<serde_json::Value> {
-    use fires_host::replay::bar::{bar_report, measure_bar};
+    use fires_host::replay::bar::{bar_report, measure_bar, smooth_bar, BarSmoothing};
     use fires_host::stereo::TriangulationMethod;
     let l = &reader.meta().pen.led_positions_m;
     let nominal = (l[1] - l[0]).abs();
     let truth = reader.exposure_truth()?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let mut report = serde_json::json!({ "kind": "bar", "recording": reader.dir() });
+    let smoothing = BarSmoothing::default();
+    let mut report = serde_json::json!({
+        "kind": "bar",
+        "recording": reader.dir(),
+        "bar_smoothing": smoothing,
+    });
     for (name, method) in [
         ("midpoint", TriangulationMethod::Midpoint),
         ("linear", TriangulationMethod::Linear),
         ("normal_equations", TriangulationMethod::NormalEquations),
     ] {
-        let samples = measure_bar(reader, method)?;
-        let r = serde_json::to_value(bar_report(&samples, nominal, truth.as_deref()))?;
+        let single = measure_bar(reader, method)?;
+        let filtered = smooth_bar(&single, smoothing);
+        let mut r = serde_json::to_value(bar_report(&filtered, nominal, truth.as_deref()))?;
+        r["single_frame"] = serde_json::to_value(bar_report(&single, nominal, truth.as_deref()))?;
         if name == "midpoint" {
             write_json(
                 &args.out.join("bar.json"),
-                &serde_json::json!({ "samples": samples }),
+                &serde_json::json!({ "samples": filtered, "single_frame_samples": single }),
             )?;
             for (k, v) in r.as_object().into_iter().flatten() {
                 report[k] = v.clone();
