@@ -7,6 +7,7 @@ pub mod clock;
 pub mod link;
 pub mod live;
 pub mod replay;
+pub mod session;
 pub mod stereo;
 pub mod stroke;
 pub mod track;

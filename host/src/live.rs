@@ -2,10 +2,11 @@
 //!
 //! One thread per camera captures frames (host time taken at capture) and one thread reads the serial link
 //! (sending [`Command::Start`] on connect and on every reconnect, [`Command::Stop`] at the end); the calling
-//! thread takes everything in arrival order, decodes the link with [`StreamDecoder`], detects blobs and feeds
-//! the stereo frames to the [`Tracker`] as they come, and writes a recording as it goes. The recording is
-//! finished (every file flushed) whenever the loop ends, so `fires replay` can track it afterwards with the
-//! IMU fusion and strokes.
+//! thread takes everything in arrival order, times the link's packets with [`LiveImuTimer`], detects blobs,
+//! and writes a recording as it goes. IMU samples, button changes and frames then pass through a short
+//! reorder buffer ([`LiveConfig::reorder_ns`]: the radio and the cameras deliver with different latencies)
+//! into the same [`Session`] that replay uses: tracker with IMU fusion, strokes, display smoothing. The
+//! recording is finished (every file flushed) whenever the loop ends.
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -13,7 +14,10 @@ use std::sync::mpsc;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use fires_protocol::{Command, DecoderStats, StreamDecoder};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+use fires_protocol::{Command, DecoderStats};
 use fires_record::{
     CameraFrame as RecordedFrame, CameraStream, FrameContent, LinkChunk, Meta, PenGeometry,
     RecordingWriter, RigCalibration, Source,
@@ -21,9 +25,13 @@ use fires_record::{
 
 use crate::capture::{CaptureError, CapturedFrame, SourceOpener};
 use crate::clock::HostClock;
-use crate::link::{LinkError, LinkEvent, SerialConfig, SerialLink};
-use crate::replay::rig::{pen_geometry, stereo_rig};
+use crate::link::{
+    ButtonChange, LinkError, LinkEvent, LiveImuTimer, SerialConfig, SerialLink, TimedLinkEvent,
+};
+use crate::replay::rig::{imu_scale, pen_geometry, stereo_rig};
+use crate::session::{Session, SessionSample, StrokeConfig, StrokeOut};
 use crate::stereo::CameraId;
+use crate::track::fusion::ImuSample;
 use crate::track::pipeline::{CameraFrame, TrackQuality, Tracker, TrackerConfig};
 use crate::vision::{BlobConfig, BlobDetector, GrayImage};
 
@@ -44,6 +52,26 @@ pub struct LiveConfig {
     pub tracker: TrackerConfig,
     /// End by itself after this long (None: only the stop flag ends it).
     pub max_duration: Option<Duration>,
+    /// Strokes: draw button, display smoothing, post-processing.
+    pub strokes: StrokeConfig,
+    /// Events are held until they are this much older than the newest event, then tracked in time
+    /// order, nanoseconds (longer than the radio's and the cameras' latency difference).
+    pub reorder_ns: u64,
+}
+
+/// Default [`LiveConfig::reorder_ns`]: Bluetooth SPP delivers sensor packets 10-60 ms late, webcams
+/// their frames 30-80 ms late; events are tracked once both streams have passed them.
+pub const DEFAULT_REORDER_NS: u64 = 100_000_000;
+
+/// Everything a live session produced.
+#[derive(Clone, Debug, Default)]
+pub struct LiveOutput {
+    /// Totals.
+    pub summary: LiveSummary,
+    /// Tracker samples in time order (stereo frames, and IMU samples while dead-reckoning).
+    pub samples: Vec<SessionSample>,
+    /// Finished strokes.
+    pub strokes: Vec<StrokeOut>,
 }
 
 /// Totals of a live session.
@@ -61,6 +89,10 @@ pub struct LiveSummary {
     pub samples: u64,
     /// Samples with a vision fix of the tip.
     pub samples_vision: u64,
+    /// IMU samples fused.
+    pub imu_samples: u64,
+    /// Strokes finished.
+    pub strokes: u64,
     /// The last tracked tip, metres (left camera frame).
     pub last_tip_m: Option<[f64; 3]>,
     /// The recording written, if any.
@@ -151,14 +183,15 @@ pub fn run_live(
     cfg: &LiveConfig,
     clock: HostClock,
     stop: Arc<AtomicBool>,
-) -> Result<LiveSummary, LiveError> {
+) -> Result<LiveOutput, LiveError> {
     let start = Instant::now();
     let meta = live_meta(cfg.rig.clone(), cfg.nominal_rate_hz);
     let rig = stereo_rig(&meta).map_err(|e| LiveError::Tracker(e.to_string()))?;
     let mut tracker_cfg = cfg.tracker.clone();
     tracker_cfg.pen = pen_geometry(&meta).map_err(|e| LiveError::Tracker(e.to_string()))?;
-    let mut tracker =
-        Tracker::new(rig, tracker_cfg).map_err(|e| LiveError::Tracker(e.to_string()))?;
+    let tracker = Tracker::new(rig, tracker_cfg).map_err(|e| LiveError::Tracker(e.to_string()))?;
+    let mut session = Session::new(tracker, cfg.strokes);
+    let mut timer = LiveImuTimer::new(meta.link.baud, meta.link.sample_rate_hz, imu_scale(&meta));
     let mut link = SerialLink::open(cfg.serial.clone(), clock)?;
     let (tx, rx) = mpsc::channel::<Msg>();
 
@@ -265,7 +298,9 @@ pub fn run_live(
         recording: cfg.record.clone(),
         ..Default::default()
     };
-    let mut decoder = StreamDecoder::default();
+    let mut out = LiveOutput::default();
+    let mut reorder = Reorder::new(cfg.reorder_ns);
+    let mut link_events = Vec::new();
     let mut detectors = [BlobDetector::new(cfg.blobs), BlobDetector::new(cfg.blobs)];
     let mut failure = None;
     loop {
@@ -303,23 +338,19 @@ pub fn run_live(
                         &f.image.data,
                     ) {
                         Ok(view) => {
-                            let window = tracker.predicted_window(id, f.t_ns, 24.0);
+                            let window = session.tracker().predicted_window(id, f.t_ns, 24.0);
                             detectors[usize::from(cam)].detect(&view, window)
                         }
                         Err(_) => Vec::new(),
                     };
-                    if let Some(s) = tracker.push_frame(CameraFrame::from_blobs(id, f.t_ns, &blobs))
-                    {
-                        summary.samples += 1;
-                        if matches!(s.quality, TrackQuality::Vision { .. }) {
-                            summary.samples_vision += 1;
-                            summary.last_tip_m = s.tip;
-                        }
-                    }
+                    reorder.push(Event::Frame(CameraFrame::from_blobs(id, f.t_ns, &blobs)));
                 }
                 Msg::Link(chunk) => {
                     summary.link_bytes += chunk.bytes.len() as u64;
-                    decoder.feed(&chunk.bytes, |_| {});
+                    timer.feed(&chunk, &mut link_events);
+                    for e in link_events.drain(..) {
+                        reorder.push(e.into());
+                    }
                     if let Some(w) = writer.as_mut() {
                         w.write_link_chunk(&chunk)?;
                     }
@@ -334,17 +365,152 @@ pub fn run_live(
             stop.store(true, Ordering::Relaxed);
             failure.get_or_insert(e);
         }
+        while let Some(e) = reorder.pop_ready() {
+            track_event(&mut session, e, &mut summary, &mut out.samples);
+        }
     }
     join_all(threads);
-    summary.link = decoder.stats().into();
+    let end_ns = clock.now_ns();
+    timer.finish(end_ns, &mut link_events);
+    for e in link_events.drain(..) {
+        reorder.push(e.into());
+    }
+    while let Some(e) = reorder.pop() {
+        track_event(&mut session, e, &mut summary, &mut out.samples);
+    }
+    session.finish(out.samples.last().map_or(0, |s| s.track.t_ns));
+    out.strokes = session.into_strokes();
+    summary.strokes = out.strokes.len() as u64;
+    summary.link = timer.stats().into();
     summary.seconds = start.elapsed().as_secs_f64();
     if let Some(w) = writer {
         w.finish()?;
     }
+    out.summary = summary;
     match failure {
         Some(e) => Err(e),
-        None => Ok(summary),
+        None => Ok(out),
     }
+}
+
+/// One live event for the session.
+#[derive(Debug, Clone)]
+enum Event {
+    Imu(ImuSample),
+    Button(ButtonChange),
+    Frame(CameraFrame),
+}
+
+impl From<TimedLinkEvent> for Event {
+    fn from(e: TimedLinkEvent) -> Self {
+        match e {
+            TimedLinkEvent::Imu(s) => Event::Imu(s),
+            TimedLinkEvent::Button(b) => Event::Button(b),
+        }
+    }
+}
+
+impl Event {
+    fn t_ns(&self) -> u64 {
+        match self {
+            Event::Imu(s) => s.t_ns,
+            Event::Button(b) => b.t_ns,
+            Event::Frame(f) => f.t_ns,
+        }
+    }
+}
+
+/// A heap entry ordered by (time, arrival number) only.
+#[derive(Debug)]
+struct Queued(u64, u64, Event);
+
+impl PartialEq for Queued {
+    fn eq(&self, other: &Self) -> bool {
+        (self.0, self.1) == (other.0, other.1)
+    }
+}
+impl Eq for Queued {}
+impl PartialOrd for Queued {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Queued {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        (self.0, self.1).cmp(&(other.0, other.1))
+    }
+}
+
+/// Holds events until they are `delay_ns` older than the newest one, then releases them in time order
+/// (ties in arrival order).
+struct Reorder {
+    heap: BinaryHeap<Reverse<Queued>>,
+    delay_ns: u64,
+    newest_ns: u64,
+    arrivals: u64,
+}
+
+impl Reorder {
+    fn new(delay_ns: u64) -> Self {
+        Reorder {
+            heap: BinaryHeap::new(),
+            delay_ns,
+            newest_ns: 0,
+            arrivals: 0,
+        }
+    }
+
+    fn push(&mut self, e: Event) {
+        let t = e.t_ns();
+        self.newest_ns = self.newest_ns.max(t);
+        self.arrivals += 1;
+        self.heap.push(Reverse(Queued(t, self.arrivals, e)));
+    }
+
+    /// The oldest event, if it has waited long enough.
+    fn pop_ready(&mut self) -> Option<Event> {
+        let Reverse(Queued(t, _, _)) = self.heap.peek()?;
+        if t.saturating_add(self.delay_ns) > self.newest_ns {
+            return None;
+        }
+        self.pop()
+    }
+
+    /// The oldest event.
+    fn pop(&mut self) -> Option<Event> {
+        self.heap.pop().map(|Reverse(Queued(_, _, e))| e)
+    }
+}
+
+/// Tracks one event and counts what came out.
+fn track_event(
+    session: &mut Session,
+    e: Event,
+    summary: &mut LiveSummary,
+    samples: &mut Vec<SessionSample>,
+) {
+    let s = match e {
+        Event::Button(b) => {
+            session.button(b);
+            return;
+        }
+        Event::Imu(i) => {
+            summary.imu_samples += 1;
+            session.imu(&i)
+        }
+        Event::Frame(f) => {
+            let s = session.frame(f);
+            if let Some(s) = &s {
+                summary.samples += 1;
+                if matches!(s.track.quality, TrackQuality::Vision { .. }) {
+                    summary.samples_vision += 1;
+                    summary.last_tip_m = s.track.tip;
+                }
+            }
+            s
+        }
+    };
+    samples.extend(s);
 }
 
 fn join_all(threads: Vec<std::thread::JoinHandle<()>>) {

@@ -8,13 +8,14 @@ use std::path::{Path, PathBuf};
 use std::process::Command as Process;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use fires_host::capture::{FrameSource, RecordedFrames, SourceOpener};
 use fires_host::clock::HostClock;
 use fires_host::link::SerialConfig;
-use fires_host::live::{run_live, LiveConfig, LiveError};
+use fires_host::live::{run_live, LiveConfig, LiveError, DEFAULT_REORDER_NS};
 use fires_host::replay::{replay, ReplayConfig};
+use fires_host::track::pipeline::TrackQuality;
 use fires_protocol::Command;
 use fires_record::RecordingReader;
 use fires_sim::{run_scenario, SimOptions};
@@ -35,6 +36,16 @@ fn recorded(dir: &Path, cam: u8) -> SourceOpener {
     })
 }
 
+/// A camera replaying its recorded exposure schedule from `start` (both cameras keep their offset).
+fn scheduled(dir: &Path, cam: u8, start: Instant, epoch_ns: u64) -> SourceOpener {
+    let dir = dir.to_path_buf();
+    Box::new(move || {
+        let reader = RecordingReader::open(&dir).expect("open simulated recording");
+        RecordedFrames::from_recording(&reader, cam)
+            .map(|s| Box::new(s.on_schedule(start, epoch_ns)) as Box<dyn FrameSource>)
+    })
+}
+
 fn config(reader: &RecordingReader, serial: &Path, record: Option<PathBuf>) -> LiveConfig {
     let replay = ReplayConfig::default();
     let mut serial = SerialConfig::pen(serial);
@@ -47,6 +58,8 @@ fn config(reader: &RecordingReader, serial: &Path, record: Option<PathBuf>) -> L
         blobs: replay.blobs,
         tracker: replay.tracker,
         max_duration: Some(Duration::from_secs(20)),
+        strokes: replay.strokes,
+        reorder_ns: DEFAULT_REORDER_NS,
     }
 }
 
@@ -55,12 +68,14 @@ fn a_live_session_over_a_pty_records_a_replayable_recording() {
     let sim = temp("sim");
     run_scenario("fires-v2", 11, 3.0, &sim, SimOptions::default()).expect("simulate");
     let reader = RecordingReader::open(&sim).expect("open");
-    let link_bytes: Vec<u8> = reader
-        .link_chunks()
-        .expect("link")
-        .into_iter()
-        .flat_map(|c| c.bytes)
-        .collect();
+    let link_chunks = reader.link_chunks().expect("link");
+    // Cameras and pen replay the simulated session on its own schedule from one start instant.
+    let epoch_ns = (0..2)
+        .filter_map(|c| Some(reader.frames(c).ok()?.first()?.exposure_time_ns))
+        .chain(link_chunks.first().map(|c| c.host_time_ns))
+        .min()
+        .expect("a session");
+    let t_start = Instant::now() + Duration::from_millis(500);
 
     let (mut master, slave) = TTYPort::pair().expect("pty pair");
     let port = slave.name().expect("slave path");
@@ -70,7 +85,8 @@ fn a_live_session_over_a_pty_records_a_replayable_recording() {
         .set_timeout(Duration::from_millis(50))
         .expect("timeout");
     let stop = Arc::new(AtomicBool::new(false));
-    // The pen: waits for Start, streams its bytes in 1 KiB pieces, then collects what the host sent until Stop.
+    // The pen: waits for Start, streams its bytes at the pace the simulator timed them, then collects what the
+    // host sent until Stop.
     let pen = {
         let stop = stop.clone();
         std::thread::spawn(move || {
@@ -87,12 +103,15 @@ fn a_live_session_over_a_pty_records_a_replayable_recording() {
                     break;
                 }
             }
-            for piece in link_bytes.chunks(1024) {
-                master.write_all(piece).expect("pen write");
-                std::thread::sleep(Duration::from_millis(10));
+            for c in &link_chunks {
+                let at = t_start + Duration::from_nanos(c.host_time_ns.saturating_sub(epoch_ns));
+                if let Some(wait) = at.checked_duration_since(Instant::now()) {
+                    std::thread::sleep(wait);
+                }
+                master.write_all(&c.bytes).expect("pen write");
             }
-            // The host stops after 2.5 s, as Ctrl-C would.
-            std::thread::sleep(Duration::from_millis(1500));
+            // The host stops after the session, as Ctrl-C would.
+            std::thread::sleep(Duration::from_millis(300));
             stop.store(true, Ordering::Relaxed);
             for _ in 0..100 {
                 if let Ok(n) = master.read(&mut buf) {
@@ -111,13 +130,17 @@ fn a_live_session_over_a_pty_records_a_replayable_recording() {
 
     let rec = temp("rec");
     let cfg = config(&reader, &link, Some(rec.clone()));
-    let summary = run_live(
-        [recorded(&sim, 0), recorded(&sim, 1)],
+    let live = run_live(
+        [
+            scheduled(&sim, 0, t_start, epoch_ns),
+            scheduled(&sim, 1, t_start, epoch_ns),
+        ],
         &cfg,
         HostClock::new(),
         stop.clone(),
     )
     .expect("live run");
+    let summary = &live.summary;
     let (got_start, got_stop) = pen.join().expect("pen thread");
     assert!(got_start, "the host sent Start");
     assert!(got_stop, "the host sent Stop");
@@ -145,6 +168,51 @@ fn a_live_session_over_a_pty_records_a_replayable_recording() {
     let out = replay(&written, &ReplayConfig::default()).expect("the recording replays");
     assert_eq!(out.frames[0] as u64, summary.frames[0]);
     assert!(out.imu.samples.len() > 100);
+
+    // Live tracking is the replay pipeline: every decoded sensor packet was fused, and the live track
+    // matches the replay of what it recorded (the only difference is the IMU time anchor, which live
+    // tracking refines as packets arrive).
+    assert_eq!(
+        summary.imu_samples, summary.link.sensor_frames,
+        "{summary:?}"
+    );
+    assert!(summary.samples_vision >= 5, "{summary:?}");
+    let vision = |s: &fires_host::track::pipeline::TrackSample| {
+        matches!(s.quality, TrackQuality::Vision { .. }).then_some((s.t_ns, s.tip?))
+    };
+    let replayed: std::collections::HashMap<u64, [f64; 3]> =
+        out.samples.iter().filter_map(vision).collect();
+    let live_tips: Vec<(u64, [f64; 3])> = live
+        .samples
+        .iter()
+        .filter_map(|s| vision(&s.track))
+        .collect();
+    let matched: Vec<f64> = live_tips
+        .iter()
+        .filter_map(|(t, p)| {
+            let q = replayed.get(t)?;
+            Some(((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt())
+        })
+        .collect();
+    assert!(
+        matched.len() * 10 >= live_tips.len() * 9,
+        "{} of {} live vision samples at replayed times",
+        matched.len(),
+        live_tips.len()
+    );
+    let close = matched.iter().filter(|d| **d < 1e-3).count();
+    assert!(
+        close * 10 >= matched.len() * 9,
+        "{close} of {} within 1 mm",
+        matched.len()
+    );
+    eprintln!(
+        "live: {} vision samples, {} at replayed times, {close} within 1 mm, {} strokes",
+        live_tips.len(),
+        matched.len(),
+        live.strokes.len()
+    );
+    assert_eq!(live.strokes.len(), out.strokes.len());
 
     // `fires replay` on it, as a user would.
     let replay_out = temp("replay");

@@ -37,11 +37,13 @@ pub trait FrameSource {
     fn next_frame(&mut self, clock: &HostClock) -> Result<Option<CapturedFrame>, CaptureError>;
 }
 
-/// A recording's images of one camera, delivered at the stream's nominal rate.
+/// A recording's images of one camera, delivered at the stream's nominal rate, or on the recorded exposure
+/// schedule ([`RecordedFrames::on_schedule`]) so that two cameras keep their recorded offset.
 pub struct RecordedFrames {
-    images: std::vec::IntoIter<GrayImage>,
+    images: std::vec::IntoIter<(u64, GrayImage)>,
     period: Duration,
     next_at: Option<Instant>,
+    schedule: Option<(Instant, u64)>,
 }
 
 impl RecordedFrames {
@@ -60,24 +62,35 @@ impl RecordedFrames {
         let mut images = Vec::new();
         for f in reader.frames(camera).map_err(|e| err(&e))? {
             if let Some(img) = reader.image(&f).map_err(|e| err(&e))? {
-                images.push(img);
+                images.push((f.exposure_time_ns, img));
             }
         }
         Ok(RecordedFrames {
             images: images.into_iter(),
             period: Duration::from_secs_f64(1.0 / rate.max(1.0)),
             next_at: None,
+            schedule: None,
         })
+    }
+
+    /// Delivers each frame at `start` plus its recorded exposure time minus `epoch_ns` (frames before the
+    /// epoch at once), instead of at the nominal rate from the first call.
+    pub fn on_schedule(mut self, start: Instant, epoch_ns: u64) -> Self {
+        self.schedule = Some((start, epoch_ns));
+        self
     }
 }
 
 impl FrameSource for RecordedFrames {
     fn next_frame(&mut self, clock: &HostClock) -> Result<Option<CapturedFrame>, CaptureError> {
-        let Some(image) = self.images.next() else {
+        let Some((exposure_ns, image)) = self.images.next() else {
             return Ok(None);
         };
         let now = Instant::now();
-        let at = self.next_at.unwrap_or(now);
+        let at = match self.schedule {
+            Some((start, epoch)) => start + Duration::from_nanos(exposure_ns.saturating_sub(epoch)),
+            None => self.next_at.unwrap_or(now),
+        };
         if at > now {
             std::thread::sleep(at - now);
         }

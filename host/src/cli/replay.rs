@@ -9,7 +9,7 @@ use anyhow::Context;
 use fires_host::replay::plot::tip_error_png;
 use fires_host::replay::report::{accuracy, tip_errors};
 use fires_host::replay::{replay, ReplayConfig, ReplayOutput};
-use fires_host::track::pipeline::TrackQuality;
+use fires_host::track::pipeline::{TrackQuality, TrackSample};
 use fires_record::RecordingReader;
 
 /// Arguments of `fires replay`.
@@ -47,7 +47,7 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<serde_json::Value> {
         &args.out.join("strokes.json"),
         &serde_json::json!({ "strokes": out.strokes }),
     )?;
-    write_track_csv(&args.out.join("track.csv"), &out)?;
+    write_track_csv(&args.out.join("track.csv"), &out.samples, &out.display_tips)?;
     let mut report = report(&reader, &out, &args.fusion)?;
     if let Some(truth) = reader.exposure_truth()? {
         let t0 = out.samples.first().map_or(0, |s| s.t_ns);
@@ -175,17 +175,22 @@ fn report(
     Ok(report)
 }
 
-fn write_json(path: &Path, value: &serde_json::Value) -> anyhow::Result<()> {
+pub(crate) fn write_json(path: &Path, value: &serde_json::Value) -> anyhow::Result<()> {
     let text = serde_json::to_string_pretty(value)?;
     std::fs::write(path, text + "\n").with_context(|| format!("cannot write {}", path.display()))
 }
 
-fn write_track_csv(path: &Path, out: &ReplayOutput) -> anyhow::Result<()> {
+/// Writes one CSV row per tracker sample (with the display-smoothed tip in the last columns).
+pub(crate) fn write_track_csv(
+    path: &Path,
+    samples: &[TrackSample],
+    display_tips: &[Option<[f64; 3]>],
+) -> anyhow::Result<()> {
     let file =
         std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
     let mut w = std::io::BufWriter::new(file);
-    writeln!(w, "t_ns,quality,leds,tip_x_m,tip_y_m,tip_z_m,dir_x,dir_y,dir_z,labels,confidence,interference")?;
-    for s in &out.samples {
+    writeln!(w, "t_ns,quality,leds,tip_x_m,tip_y_m,tip_z_m,dir_x,dir_y,dir_z,labels,confidence,interference,display_x_m,display_y_m,display_z_m")?;
+    for (i, s) in samples.iter().enumerate() {
         let (q, n) = match s.quality {
             TrackQuality::Vision { leds } => ("vision", leds),
             TrackQuality::DeadReckoned => ("dead_reckoned", 0),
@@ -204,12 +209,13 @@ fn write_track_csv(path: &Path, out: &ReplayOutput) -> anyhow::Result<()> {
             .join(" ");
         writeln!(
             w,
-            "{},{q},{n},{},{},{labels},{:.3},{}",
+            "{},{q},{n},{},{},{labels},{:.3},{},{}",
             s.t_ns,
             v3(s.tip),
             v3(s.direction),
             s.confidence,
-            s.interference
+            s.interference,
+            v3(display_tips.get(i).copied().flatten())
         )?;
     }
     w.flush()

@@ -1,7 +1,7 @@
 //! `fires track --left DEV --right DEV --serial PATH --rig rig.json [--record DIR] [--out OUT_DIR]`: live
-//! tracking from two cameras (the `camera` feature) and the pen's serial link until Ctrl-C; with `--record`
-//! the session is written as a recording, and with `--out` (needs `--record`) it is then replayed like
-//! `fires replay` (strokes, track, report with the IMU fusion).
+//! tracking from two cameras (the `camera` feature) and the pen's serial link until Ctrl-C, with the IMU fusion
+//! and button-delimited strokes as in `fires replay`; with `--record` the session is also written as a
+//! recording, and with `--out` its strokes.json, track.csv and report.json (the session summary) are written.
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -12,11 +12,11 @@ use anyhow::Context;
 use fires_host::capture::SourceOpener;
 use fires_host::clock::HostClock;
 use fires_host::link::SerialConfig;
-use fires_host::live::{run_live, LiveConfig};
+use fires_host::live::{run_live, LiveConfig, LiveOutput, DEFAULT_REORDER_NS};
 use fires_host::replay::ReplayConfig;
 use fires_record::RigCalibration;
 
-use super::replay::{replay_to_dir, ReplayArgs};
+use super::replay::{write_json, write_track_csv};
 
 /// Arguments of `fires track`.
 #[derive(Debug, clap::Args)]
@@ -36,7 +36,7 @@ pub struct TrackArgs {
     /// Write the session as a recording into this directory (replayable with `fires replay`).
     #[arg(long)]
     pub record: Option<PathBuf>,
-    /// After Ctrl-C, replay the recording into this directory (needs --record).
+    /// Write strokes.json, track.csv and report.json into this directory when the session ends.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Nominal camera frame rate for the recording's metadata, hertz.
@@ -70,9 +70,6 @@ fn camera(_device: &str) -> anyhow::Result<SourceOpener> {
 /// `fires track`: prints a JSON summary line at the end.
 pub fn run(args: &TrackArgs) -> anyhow::Result<()> {
     let sources = [camera(&args.left)?, camera(&args.right)?];
-    if args.out.is_some() && args.record.is_none() {
-        anyhow::bail!("--out replays the recording: give --record DIR too");
-    }
     let rig: RigCalibration = serde_json::from_slice(
         &std::fs::read(&args.rig)
             .with_context(|| format!("cannot read rig {}", args.rig.display()))?,
@@ -93,17 +90,29 @@ pub fn run(args: &TrackArgs) -> anyhow::Result<()> {
         blobs: replay.blobs,
         tracker: replay.tracker,
         max_duration: args.seconds.map(Duration::from_secs_f64),
+        strokes: replay.strokes,
+        reorder_ns: DEFAULT_REORDER_NS,
     };
     eprintln!("tracking; Ctrl-C ends");
-    let summary = run_live(sources, &cfg, HostClock::new(), stop)?;
-    println!("{}", serde_json::to_string(&summary)?);
-    if let (Some(rec), Some(out)) = (&args.record, &args.out) {
-        let report = replay_to_dir(&ReplayArgs {
-            recording: rec.clone(),
-            out: out.clone(),
-            fusion: "orientation".into(),
-        })?;
-        println!("{report}");
+    let out = run_live(sources, &cfg, HostClock::new(), stop)?;
+    println!("{}", serde_json::to_string(&out.summary)?);
+    if let Some(dir) = &args.out {
+        write_live_outputs(dir, &out)?;
     }
     Ok(())
+}
+
+/// strokes.json, track.csv and report.json of a live session, as `fires replay` writes them.
+pub fn write_live_outputs(dir: &std::path::Path, out: &LiveOutput) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    write_json(
+        &dir.join("strokes.json"),
+        &serde_json::json!({ "strokes": out.strokes }),
+    )?;
+    let samples: Vec<_> = out.samples.iter().map(|s| s.track).collect();
+    let display: Vec<_> = out.samples.iter().map(|s| s.display_tip).collect();
+    write_track_csv(&dir.join("track.csv"), &samples, &display)?;
+    let mut report = serde_json::to_value(&out.summary)?;
+    report["kind"] = "live".into();
+    write_json(&dir.join("report.json"), &report)
 }

@@ -11,16 +11,9 @@
 use fires_protocol::{Frame, StreamDecoder, FRAME_LEN};
 use fires_record::LinkChunk;
 
+pub use crate::link::imu_timing::ButtonChange;
+use crate::link::imu_timing::{prev_counter_gap, unwrap_counter};
 use crate::track::fusion::{ImuSample, ImuScale};
-
-/// A pen button state change at a host time.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ButtonChange {
-    /// Host time of the change, nanoseconds.
-    pub t_ns: u64,
-    /// Buttons pressed (bit i = button i+1).
-    pub buttons: u8,
-}
 
 /// Everything the link carried, timed on the host clock.
 #[derive(Debug, Clone, Default)]
@@ -81,22 +74,6 @@ fn decode_arrivals(
     (out, decoder.stats(), total)
 }
 
-/// Unwraps 8-bit counters into sample indices using arrival times.
-fn unwrap_counter(prev: Option<(i64, u64)>, counter: u8, arrival_ns: u64, period_ns: f64) -> i64 {
-    let Some((k0, t0)) = prev else {
-        return i64::from(counter);
-    };
-    let guess = k0 as f64 + (arrival_ns as f64 - t0 as f64) / period_ns;
-    let base = guess.round() as i64;
-    let offset = (i64::from(counter) - base).rem_euclid(256);
-    let k = if offset > 128 {
-        base + offset - 256
-    } else {
-        base + offset
-    };
-    k.max(k0 + 1)
-}
-
 /// Decodes the link into timed IMU samples and button changes.
 pub fn imu_stream(
     chunks: &[LinkChunk],
@@ -151,14 +128,6 @@ pub fn imu_stream(
         buttons,
         stats,
         bytes,
-    }
-}
-
-/// How many samples before the last decoded sensor packet the status's named counter lies (0 normally).
-fn prev_counter_gap(prev: Option<(i64, u64)>, sensor_counter: u8) -> u8 {
-    match prev {
-        Some((k, _)) => (k.rem_euclid(256) as u8).wrapping_sub(sensor_counter),
-        None => 0,
     }
 }
 

@@ -6,8 +6,9 @@ use fires_record::{FrameContent, RecordError, RecordingReader};
 
 use super::imu_stream::{imu_stream, ImuStream};
 use super::rig::{imu_scale, pen_geometry, stereo_rig, MetaError};
+pub use crate::session::StrokeOut;
+use crate::session::{Session, StrokeConfig};
 use crate::stereo::CameraId;
-use crate::stroke::{postprocess, GaussianConfig, PostprocessConfig, StrokeEvent, StrokeSegmenter};
 use crate::track::fusion::WorldReference;
 use crate::track::pipeline::{CameraFrame, TrackSample, Tracker, TrackerConfig};
 use crate::vision::{BlobConfig, BlobDetector, GrayImage};
@@ -19,12 +20,8 @@ pub struct ReplayConfig {
     pub tracker: TrackerConfig,
     /// Blob detector settings for image cameras.
     pub blobs: BlobConfig,
-    /// Display smoothing of the tip (thesis: 300 taps, 3 passes).
-    pub smoothing: GaussianConfig,
-    /// Stroke post-processing.
-    pub postprocess: PostprocessConfig,
-    /// Mask of the button that draws (bit 0 = button 1).
-    pub draw_button_mask: u8,
+    /// Strokes: draw button, display smoothing, post-processing.
+    pub strokes: StrokeConfig,
     /// Search margin around the predicted LED positions, pixels.
     pub window_margin_px: f64,
 }
@@ -34,9 +31,7 @@ impl Default for ReplayConfig {
         ReplayConfig {
             tracker: TrackerConfig::default(),
             blobs: BlobConfig::default(),
-            smoothing: GaussianConfig::default(),
-            postprocess: PostprocessConfig::default(),
-            draw_button_mask: 0b0001,
+            strokes: StrokeConfig::default(),
             window_margin_px: 24.0,
         }
     }
@@ -54,21 +49,6 @@ pub enum ReplayError {
     /// The tracker rejected its configuration.
     #[error("tracker: {0}")]
     Tracker(String),
-}
-
-/// One finished stroke.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct StrokeOut {
-    /// Stroke number, from 0 in order of pen-down.
-    pub id: u32,
-    /// Pen-down host time, nanoseconds.
-    pub t_start_ns: u64,
-    /// Pen-up host time, nanoseconds.
-    pub t_end_ns: u64,
-    /// Tracked tip points of the stroke (raw, as the tracker gave them), metres.
-    pub raw_points: usize,
-    /// The post-processed polyline (sampling, constrained B-spline, resampling), metres.
-    pub polyline_m: Vec<[f64; 3]>,
 }
 
 /// Time spent per stage, nanoseconds in total.
@@ -100,6 +80,8 @@ pub struct LabelPixels {
 pub struct ReplayOutput {
     /// One tracker sample per stereo frame pair (and per IMU sample while dead-reckoning).
     pub samples: Vec<TrackSample>,
+    /// For each sample, the tip after the real-time Gaussian display smoothing.
+    pub display_tips: Vec<Option<[f64; 3]>>,
     /// For each sample, the image blobs its labels name (None for IMU-driven samples).
     pub label_pixels: Vec<Option<LabelPixels>>,
     /// Finished strokes.
@@ -159,8 +141,9 @@ pub fn replay(
         }
         None => "default",
     };
-    let mut tracker = Tracker::new(stereo_rig(meta)?, tracker_cfg)
+    let tracker = Tracker::new(stereo_rig(meta)?, tracker_cfg)
         .map_err(|e| ReplayError::Tracker(e.to_string()))?;
+    let mut session = Session::new(tracker, config.strokes);
 
     let mut events: Vec<Event> = (0..imu.samples.len()).map(Event::Imu).collect();
     let mut frames = [0usize; 2];
@@ -181,32 +164,21 @@ pub fn replay(
         BlobDetector::new(config.blobs),
     ];
     let mut samples = Vec::new();
+    let mut display_tips = Vec::new();
     let mut label_pixels = Vec::new();
     let mut last: [LastFrame; 2] = [None, None];
-    let mut segmenter = StrokeSegmenter::default();
-    let mut strokes = Vec::new();
     let mut buttons = imu.buttons.iter().peekable();
-    let mut drawing = false;
     for event in events {
         let now = event.time(&imu);
         while let Some(b) = buttons.next_if(|b| b.t_ns <= now) {
-            let pressed = b.buttons & config.draw_button_mask != 0;
-            if pressed != drawing {
-                drawing = pressed;
-                finish_stroke(
-                    segmenter.button(b.t_ns, pressed),
-                    config,
-                    &mut strokes,
-                    &mut times,
-                );
-            }
+            session.button(*b);
         }
         match event {
             Event::Imu(i) => {
                 let t = Instant::now();
-                if let Some(s) = tracker.push_imu(&imu.samples[i]) {
-                    segmenter.tip(s.t_ns, s.tip);
-                    samples.push(s);
+                if let Some(s) = session.imu(&imu.samples[i]) {
+                    samples.push(s.track);
+                    display_tips.push(s.display_tip);
                     label_pixels.push(None);
                 }
                 times.track_ns += t.elapsed().as_nanos() as u64;
@@ -219,32 +191,27 @@ pub fn replay(
                     id,
                     images[id as usize],
                     &mut detectors,
-                    &tracker,
+                    session.tracker(),
                     config,
                 )?;
                 times.blobs_ns += t.elapsed().as_nanos() as u64;
                 last[id as usize] = Some((f.index, frame.blobs.clone()));
                 let t = Instant::now();
-                if let Some(s) = tracker.push_frame(frame) {
-                    segmenter.tip(s.t_ns, s.tip);
-                    label_pixels.push(labelled_pixels(&s, &last));
-                    samples.push(s);
+                if let Some(s) = session.frame(frame) {
+                    label_pixels.push(labelled_pixels(&s.track, &last));
+                    samples.push(s.track);
+                    display_tips.push(s.display_tip);
                 }
                 times.track_ns += t.elapsed().as_nanos() as u64;
             }
         }
     }
-    if drawing {
-        let end = samples.last().map_or(0, |s| s.t_ns);
-        finish_stroke(
-            segmenter.button(end, false),
-            config,
-            &mut strokes,
-            &mut times,
-        );
-    }
+    session.finish(samples.last().map_or(0, |s: &TrackSample| s.t_ns));
+    times.strokes_ns = session.strokes_ns();
+    let strokes = session.into_strokes();
     Ok(ReplayOutput {
         samples,
+        display_tips,
         label_pixels,
         strokes,
         imu,
@@ -322,26 +289,4 @@ fn camera_frame(
         Err(_) => Vec::new(),
     };
     Ok(CameraFrame::from_blobs(id, f.exposure_time_ns, &blobs))
-}
-
-fn finish_stroke(
-    event: Option<StrokeEvent>,
-    config: &ReplayConfig,
-    out: &mut Vec<StrokeOut>,
-    times: &mut StageTimes,
-) {
-    let Some(StrokeEvent::Ended(stroke)) = event else {
-        return;
-    };
-    let t = Instant::now();
-    let raw: Vec<[f64; 3]> = stroke.points.iter().map(|p| p.p).collect();
-    let polyline_m = postprocess(&raw, &config.postprocess).unwrap_or(raw.clone());
-    out.push(StrokeOut {
-        id: out.len() as u32,
-        t_start_ns: stroke.t_start_ns,
-        t_end_ns: stroke.t_end_ns,
-        raw_points: raw.len(),
-        polyline_m,
-    });
-    times.strokes_ns += t.elapsed().as_nanos() as u64;
 }
