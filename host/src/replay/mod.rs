@@ -1,5 +1,5 @@
 //! Replay: one pipeline from a recording (simulated or of real hardware) to strokes, per-frame tracks and a
-//! report (architecture.md §1, §4). Live tracking feeds the same [`crate::track::Tracker`]; replaying the same
+//! report (architecture.md §1, §4). Live tracking feeds the same [`crate::session::Session`]; replaying the same
 //! recording twice gives identical output, since nothing here reads a clock.
 //!
 //! Stages: link bytes -> [`imu_stream`] (decode, sample times, buttons) -> camera frames (blob lists, or 8-bit
