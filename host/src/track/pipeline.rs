@@ -493,9 +493,10 @@ impl Tracker {
             .filter(|p| p.t_ns < cur.t_ns && cur.t_ns - p.t_ns <= 100_000_000);
         let prev_ids = prev.map(|p| self.frame_identities(camera, p));
         let shift = t as f64 - cur.t_ns as f64;
-        let project_at = |tt: u64, k: usize| {
-            let p = self.predicted_leds(tt)?[k];
-            self.rig.project(camera, &p).ok()
+        // Predicted LEDs at the other frame's time and at this one, computed once per frame.
+        let (at_frame, at_target) = (self.predicted_leds(cur.t_ns), self.predicted_leds(t));
+        let project = |leds: Option<[Vector3<f64>; LED_COUNT]>, k: usize| {
+            self.rig.project(camera, &leds?[k]).ok()
         };
         let mut out = Vec::new();
         for (k, id) in cur_ids.iter().enumerate() {
@@ -508,7 +509,7 @@ impl Tracker {
                     .then(|| [(b[0] - q[0]) / dt, (b[1] - q[1]) / dt])
             });
             let v = measured.or_else(|| {
-                let (a, c) = (project_at(cur.t_ns, k)?, project_at(t, k)?);
+                let (a, c) = (project(at_frame, k)?, project(at_target, k)?);
                 (shift != 0.0).then(|| [(c[0] - a[0]) / shift, (c[1] - a[1]) / shift])
             });
             if let Some(v) = v {
