@@ -95,6 +95,11 @@ pub struct LiveSummary {
     pub strokes: u64,
     /// The last tracked tip, metres (left camera frame).
     pub last_tip_m: Option<[f64; 3]>,
+    /// The world reference in use at the end (configured, or estimated during the session);
+    /// `fires track --world` takes it back to skip the estimate next time.
+    pub world: Option<crate::track::fusion::WorldReference>,
+    /// The online estimate behind `world`, when it was estimated.
+    pub world_fit: Option<crate::track::fusion::WorldFit>,
     /// The recording written, if any.
     pub recording: Option<PathBuf>,
     /// Wall time, seconds.
@@ -378,6 +383,8 @@ pub fn run_live(
     while let Some(e) = reorder.pop() {
         track_event(&mut session, e, &mut summary, &mut out.samples);
     }
+    summary.world = session.tracker().world().copied();
+    summary.world_fit = session.tracker().world_fit().map(|(_, f)| *f);
     session.finish(out.samples.last().map_or(0, |s| s.track.t_ns));
     out.strokes = session.into_strokes();
     summary.strokes = out.strokes.len() as u64;

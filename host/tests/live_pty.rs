@@ -14,6 +14,7 @@ use fires_host::capture::{FrameSource, RecordedFrames, SourceOpener};
 use fires_host::clock::HostClock;
 use fires_host::link::SerialConfig;
 use fires_host::live::{run_live, LiveConfig, LiveError, DEFAULT_REORDER_NS};
+use fires_host::replay::run::world_reference;
 use fires_host::replay::{replay, ReplayConfig};
 use fires_host::track::pipeline::TrackQuality;
 use fires_protocol::Command;
@@ -46,8 +47,15 @@ fn scheduled(dir: &Path, cam: u8, start: Instant, epoch_ns: u64) -> SourceOpener
     })
 }
 
+/// The live configuration. The tracker takes the simulated world reference, as the replay it is
+/// compared with does: the online estimate is accepted at a time that depends on the IMU time
+/// anchor, which live tracking refines as packets arrive, so it would not compare frame by frame.
 fn config(reader: &RecordingReader, serial: &Path, record: Option<PathBuf>) -> LiveConfig {
-    let replay = ReplayConfig::default();
+    let mut replay = ReplayConfig::default();
+    replay.tracker.world = reader
+        .world_truth()
+        .expect("world truth")
+        .map(|w| world_reference(&w));
     let mut serial = SerialConfig::pen(serial);
     serial.read_timeout = Duration::from_millis(20);
     LiveConfig {
@@ -165,7 +173,12 @@ fn a_live_session_over_a_pty_records_a_replayable_recording() {
             .sum::<u64>(),
         summary.link_bytes
     );
-    let out = replay(&written, &ReplayConfig::default()).expect("the recording replays");
+    // The written recording has no ground truth: the replay gets the live run's world reference.
+    let truth_world = ReplayConfig {
+        tracker: cfg.tracker.clone(),
+        ..ReplayConfig::default()
+    };
+    let out = replay(&written, &truth_world).expect("the recording replays");
     assert_eq!(out.frames[0] as u64, summary.frames[0]);
     assert!(out.imu.samples.len() > 100);
 

@@ -51,6 +51,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         recording: rec,
         out: args.out.join("replay"),
         fusion: "orientation".into(),
+        world: "estimate".into(),
     })?;
     eprintln!(
         "tracked; strokes, track and report in {}",

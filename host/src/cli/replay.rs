@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use fires_host::replay::plot::tip_error_png;
-use fires_host::replay::report::{accuracy, tip_errors};
-use fires_host::replay::{replay, ReplayConfig, ReplayOutput};
+use fires_host::replay::report::{accuracy, tip_errors, world_report};
+use fires_host::replay::run::world_reference;
+use fires_host::replay::{replay, ReplayConfig, ReplayOutput, WorldSource};
 use fires_host::track::pipeline::{TrackQuality, TrackSample};
 use fires_record::RecordingReader;
 
@@ -24,6 +25,11 @@ pub struct ReplayArgs {
     /// `thesis` (the thesis's 4-state Kalman filter, eq. 4.18-4.21).
     #[arg(long, default_value = "orientation")]
     pub fusion: String,
+    /// World reference (gravity and magnetic field in the camera frame): `estimate` it from the
+    /// session as a live run must (default), or take the recording's `truth` (a perfectly
+    /// calibrated rig).
+    #[arg(long, default_value = "estimate")]
+    pub world: String,
 }
 
 /// Replays and writes the outputs; returns the report (used by `fires demo`).
@@ -35,6 +41,11 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<serde_json::Value> {
         "orientation" => fires_host::track::fusion::FusionKind::Orientation,
         "thesis" => fires_host::track::fusion::FusionKind::ThesisKalman,
         other => anyhow::bail!("unknown fusion '{other}' (orientation, thesis)"),
+    };
+    config.world = match args.world.as_str() {
+        "estimate" => WorldSource::Estimate,
+        "truth" => WorldSource::Truth,
+        other => anyhow::bail!("unknown world reference '{other}' (estimate, truth)"),
     };
     if reader.meta().pen.led_positions_m.len() == 2 {
         return bar_to_dir(&reader, args);
@@ -132,6 +143,7 @@ fn report(
         "camera_frames": out.frames,
         "strokes": out.strokes.len(),
         "world_reference": out.world_reference,
+        "world": world_report(out, reader.world_truth()?.map(|w| world_reference(&w)).as_ref()),
         "link": {
             "bytes": out.imu.bytes,
             "sensor_frames": link.sensor_frames,

@@ -45,6 +45,42 @@ pub struct TrackArgs {
     /// Stop by itself after this many seconds.
     #[arg(long)]
     pub seconds: Option<f64>,
+    /// World reference (gravity and magnetic field in the camera frame) of this rig: the
+    /// report.json of an earlier `fires track --out` (its `world`) or a `{up, magnetic, gravity}`
+    /// object. Without it the first seconds of the session estimate it.
+    #[arg(long)]
+    pub world: Option<PathBuf>,
+}
+
+/// Reads a world reference from `path`: a report with a `world` field, or the reference itself.
+fn read_world_reference(
+    path: &std::path::Path,
+) -> anyhow::Result<fires_host::track::fusion::WorldReference> {
+    let text = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let value: serde_json::Value =
+        serde_json::from_slice(&text).with_context(|| format!("{} is not JSON", path.display()))?;
+    let world = match value.get("world") {
+        Some(w) if w.is_object() => w.clone(),
+        _ => value,
+    };
+    let world: fires_host::track::fusion::WorldReference = serde_json::from_value(world)
+        .with_context(|| {
+            format!(
+                "{} holds no world reference (up, magnetic, gravity)",
+                path.display()
+            )
+        })?;
+    let finite = world
+        .up
+        .iter()
+        .chain(&world.magnetic)
+        .chain(std::iter::once(&world.gravity))
+        .all(|v| v.is_finite());
+    let up_norm = world.up.iter().map(|v| v * v).sum::<f64>().sqrt();
+    if !finite || up_norm < 0.5 || world.gravity <= 0.0 {
+        anyhow::bail!("{}: the world reference is degenerate", path.display());
+    }
+    Ok(world)
 }
 
 #[cfg(feature = "camera")]
@@ -81,7 +117,12 @@ pub fn run(args: &TrackArgs) -> anyhow::Result<()> {
         ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed))
             .context("cannot install the Ctrl-C handler")?;
     }
-    let replay = ReplayConfig::default();
+    let mut replay = ReplayConfig::default();
+    replay.tracker.world = args
+        .world
+        .as_deref()
+        .map(read_world_reference)
+        .transpose()?;
     let cfg = LiveConfig {
         rig,
         serial: SerialConfig::pen(&args.serial),
@@ -115,4 +156,38 @@ pub fn write_live_outputs(dir: &std::path::Path, out: &LiveOutput) -> anyhow::Re
     let mut report = serde_json::to_value(&out.summary)?;
     report["kind"] = "live".into();
     write_json(&dir.join("report.json"), &report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::read_world_reference;
+
+    #[test]
+    fn world_reference_from_a_report_or_bare_and_errors_otherwise() {
+        let dir = std::env::temp_dir().join(format!("fires-world-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let bare = r#"{"up":[0.0,-0.9,0.3],"magnetic":[0.1,0.5,0.8],"gravity":9.81}"#;
+        let report = format!(r#"{{"kind":"live","world":{bare}}}"#);
+        for (name, text) in [("bare.json", bare.to_string()), ("report.json", report)] {
+            let p = dir.join(name);
+            std::fs::write(&p, text).unwrap();
+            let w = read_world_reference(&p).unwrap();
+            assert_eq!(w.up, [0.0, -0.9, 0.3]);
+            assert_eq!(w.gravity, 9.81);
+        }
+        for (name, text) in [
+            ("none.json", r#"{"kind":"live","world":null}"#),
+            (
+                "zero.json",
+                r#"{"up":[0,0,0],"magnetic":[0,1,0],"gravity":9.8}"#,
+            ),
+            ("junk.json", "not json"),
+        ] {
+            let p = dir.join(name);
+            std::fs::write(&p, text).unwrap();
+            assert!(read_world_reference(&p).is_err(), "{name}");
+        }
+        assert!(read_world_reference(&dir.join("missing.json")).is_err());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

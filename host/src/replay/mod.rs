@@ -14,4 +14,4 @@ pub mod report;
 pub mod rig;
 pub mod run;
 
-pub use run::{replay, ReplayConfig, ReplayError, ReplayOutput, StrokeOut};
+pub use run::{replay, ReplayConfig, ReplayError, ReplayOutput, StrokeOut, WorldSource};

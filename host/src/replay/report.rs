@@ -12,6 +12,7 @@ use fires_record::ExposureTruth;
 use serde::Serialize;
 
 use super::run::ReplayOutput;
+use crate::track::fusion::WorldReference;
 use crate::track::pipeline::TrackQuality;
 
 /// A labelled blob farther than this from the true image of its LED is not that LED's image, pixels.
@@ -173,4 +174,51 @@ pub fn accuracy(out: &ReplayOutput, truth: &[ExposureTruth]) -> Accuracy {
         mislabels,
         labels_checked: checked,
     }
+}
+
+/// Where the world reference came from and, when it was estimated and the recording has ground
+/// truth, how far the estimate is from the truth.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct WorldReport {
+    /// "truth", "configured" or "estimated".
+    pub source: String,
+    /// Seconds from the first IMU sample to the first accepted estimate.
+    pub accepted_after_s: Option<f64>,
+    /// Axis pairs behind the final estimate (inliers / all).
+    pub pairs: Option<[usize; 2]>,
+    /// RMS residual of the final fit, degrees.
+    pub residual_rms_deg: Option<f64>,
+    /// Standard deviation of the worst-determined axis of the final fit, degrees.
+    pub worst_axis_sigma_deg: Option<f64>,
+    /// Angle between the estimated and the true "up", degrees.
+    pub up_error_deg: Option<f64>,
+    /// Angle between the estimated and the true magnetic north (horizontal), degrees.
+    pub heading_error_deg: Option<f64>,
+}
+
+/// The world-reference part of the report.
+pub fn world_report(out: &ReplayOutput, truth: Option<&WorldReference>) -> WorldReport {
+    let mut r = WorldReport {
+        source: out.world_reference.to_string(),
+        ..WorldReport::default()
+    };
+    let Some((t_accept, fit)) = &out.world_fit else {
+        return r;
+    };
+    let t0 = out.imu.samples.first().map_or(*t_accept, |s| s.t_ns);
+    r.accepted_after_s = Some(t_accept.saturating_sub(t0) as f64 / 1e9);
+    r.pairs = Some([fit.pairs, fit.candidates]);
+    r.residual_rms_deg = Some(fit.residual_rms.to_degrees());
+    r.worst_axis_sigma_deg = Some(fit.worst_axis_sigma.to_degrees());
+    if let Some(t) = truth {
+        let up = t.up();
+        r.up_error_deg = Some(fit.reference.up().angle(&up).to_degrees());
+        let north = |m: nalgebra::Vector3<f64>| m - up * m.dot(&up);
+        r.heading_error_deg = Some(
+            north(fit.reference.magnetic())
+                .angle(&north(t.magnetic()))
+                .to_degrees(),
+        );
+    }
+    r
 }

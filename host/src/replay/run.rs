@@ -9,7 +9,7 @@ use super::rig::{imu_scale, pen_geometry, stereo_rig, MetaError};
 pub use crate::session::StrokeOut;
 use crate::session::{Session, StrokeConfig};
 use crate::stereo::CameraId;
-use crate::track::fusion::WorldReference;
+use crate::track::fusion::{WorldFit, WorldReference};
 use crate::track::pipeline::{CameraFrame, TrackSample, Tracker, TrackerConfig};
 use crate::vision::{BlobConfig, BlobDetector, GrayImage};
 
@@ -24,6 +24,18 @@ pub struct ReplayConfig {
     pub strokes: StrokeConfig,
     /// Search margin around the predicted LED positions, pixels.
     pub window_margin_px: f64,
+    /// Where the world reference (gravity and magnetic field in the camera frame) comes from.
+    pub world: WorldSource,
+}
+
+/// Source of the world reference in a replay.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+pub enum WorldSource {
+    /// Estimated during the replay, as a live session must (the default).
+    #[default]
+    Estimate,
+    /// The recording's ground truth when it has one (a perfectly calibrated rig), else estimated.
+    Truth,
 }
 
 impl Default for ReplayConfig {
@@ -33,6 +45,7 @@ impl Default for ReplayConfig {
             blobs: BlobConfig::default(),
             strokes: StrokeConfig::default(),
             window_margin_px: 24.0,
+            world: WorldSource::default(),
         }
     }
 }
@@ -94,8 +107,10 @@ pub struct ReplayOutput {
     pub times: StageTimes,
     /// Wall time of the whole replay, nanoseconds.
     pub wall_ns: u64,
-    /// Where the gravity/magnetic world reference came from ("truth" or "default").
+    /// Where the gravity/magnetic world reference came from ("truth", "configured" or "estimated").
     pub world_reference: &'static str,
+    /// The online world estimate (time accepted, fit) when it was estimated.
+    pub world_fit: Option<(u64, WorldFit)>,
 }
 
 /// The latest frame of a camera: its index and blob positions.
@@ -134,12 +149,17 @@ pub fn replay(
 
     let mut tracker_cfg = config.tracker.clone();
     tracker_cfg.pen = pen_geometry(meta)?;
-    let world_reference = match reader.world_truth()? {
-        Some(w) => {
-            tracker_cfg.world = world_reference(&w);
+    let truth = match config.world {
+        WorldSource::Truth => reader.world_truth()?,
+        WorldSource::Estimate => None,
+    };
+    let world_reference = match (truth, tracker_cfg.world) {
+        (Some(w), _) => {
+            tracker_cfg.world = Some(world_reference(&w));
             "truth"
         }
-        None => "default",
+        (None, Some(_)) => "configured",
+        (None, None) => "estimated",
     };
     let tracker = Tracker::new(stereo_rig(meta)?, tracker_cfg)
         .map_err(|e| ReplayError::Tracker(e.to_string()))?;
@@ -207,6 +227,7 @@ pub fn replay(
         }
     }
     session.finish(samples.last().map_or(0, |s: &TrackSample| s.t_ns));
+    let world_fit = session.tracker().world_fit().copied();
     times.strokes_ns = session.strokes_ns();
     let strokes = session.into_strokes();
     Ok(ReplayOutput {
@@ -219,6 +240,7 @@ pub fn replay(
         times,
         wall_ns: wall.elapsed().as_nanos() as u64,
         world_reference,
+        world_fit,
     })
 }
 
@@ -237,7 +259,8 @@ fn labelled_pixels(s: &TrackSample, last: &[LastFrame; 2]) -> Option<LabelPixels
     })
 }
 
-fn world_reference(w: &fires_record::WorldTruth) -> WorldReference {
+/// The world reference of a recording's ground truth.
+pub fn world_reference(w: &fires_record::WorldTruth) -> WorldReference {
     let g = w.gravity_world_mps2;
     let norm = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
     let up = if norm > 0.0 {

@@ -16,9 +16,10 @@
 
 use super::fusion::{
     DeadReckonConfig, DirectionFilter, FusionKind, ImuSample, OrientationConfig, OrientationFilter,
-    ThesisKalman, ThesisKalmanConfig, TipDeadReckoner, TipFilter, TipFilterConfig, WorldReference,
+    ThesisKalman, ThesisKalmanConfig, TipDeadReckoner, TipFilter, TipFilterConfig,
+    WorldEstimateConfig, WorldEstimator, WorldFit, WorldReference,
 };
-use super::identify::{Identifier, IdentifyConfig, IdentifyError, IdentifyPrior};
+use super::identify::{Identifier, IdentifyConfig, IdentifyError, IdentifyPrior, Resolution};
 use super::pen::{PenError, PenGeometry, LED_COUNT};
 use super::tip::TipEstimator;
 use crate::stereo::{
@@ -54,8 +55,12 @@ pub struct TrackerConfig {
     pub orientation: OrientationConfig,
     /// Noise of the thesis filter.
     pub thesis_kalman: ThesisKalmanConfig,
-    /// Gravity and magnetic directions in the world (left camera) frame.
-    pub world: WorldReference,
+    /// Gravity and magnetic directions in the world (left camera) frame; `None` (the default):
+    /// estimated during the session ([`super::fusion::world_estimate`]), and until then the
+    /// fusion gives no prior, no fused axis and no inertial dead reckoning.
+    pub world: Option<WorldReference>,
+    /// When the online world estimate is accepted.
+    pub world_estimate: WorldEstimateConfig,
     /// Occlusion handling.
     pub dead_reckon: DeadReckonConfig,
     /// Tip position filter (constant velocity + IMU acceleration).
@@ -96,7 +101,8 @@ impl Default for TrackerConfig {
             fusion: FusionKind::Orientation,
             orientation: OrientationConfig::default(),
             thesis_kalman: ThesisKalmanConfig::default(),
-            world: WorldReference::default(),
+            world: None,
+            world_estimate: WorldEstimateConfig::default(),
             dead_reckon: DeadReckonConfig::default(),
             tip_filter: TipFilterConfig::default(),
             imu_to_tip: [0.0; 3],
@@ -267,6 +273,10 @@ pub struct Tracker {
     pen_history: [Option<(u64, [Vector3<f64>; LED_COUNT])>; 2],
     last_vision_ns: Option<u64>,
     occluded: bool,
+    /// The world reference in use: configured, or estimated (then `world_fit` is set).
+    world: Option<WorldReference>,
+    world_estimator: Option<WorldEstimator>,
+    world_fit: Option<(u64, WorldFit)>,
 }
 
 impl Tracker {
@@ -274,20 +284,26 @@ impl Tracker {
     pub fn new(rig: StereoRig, config: TrackerConfig) -> Result<Self, PenError> {
         let identifier = Identifier::new(config.pen, config.identify)?
             .with_rig(&rig, config.correspondence.pixel_sigma);
+        // Until a reference is known the filters run in the default frame on the IMU alone.
+        let initial_world = config.world.unwrap_or_default();
         let filter = match config.fusion {
             FusionKind::ThesisKalman => Filter::Thesis(Box::new(ThesisKalman::new(
                 config.thesis_kalman,
-                config.world,
+                initial_world,
             ))),
             FusionKind::Orientation => Filter::Orientation(Box::new(OrientationFilter::new(
                 config.orientation,
-                config.world,
+                initial_world,
             ))),
         };
+        let world_estimator = config
+            .world
+            .is_none()
+            .then(|| WorldEstimator::new(config.world_estimate, config.orientation));
         Ok(Self {
             triangulator: Triangulator::new(&rig, config.method),
             tip: TipEstimator::new(&config.pen),
-            reckoner: TipDeadReckoner::new(config.dead_reckon, config.world),
+            reckoner: TipDeadReckoner::new(config.dead_reckon, initial_world),
             tip_filter: TipFilter::new(config.tip_filter),
             last_gyro: None,
             identifier,
@@ -304,6 +320,9 @@ impl Tracker {
             pen_history: [None; 2],
             last_vision_ns: None,
             occluded: false,
+            world: config.world,
+            world_estimator,
+            world_fit: None,
             config,
         })
     }
@@ -318,12 +337,51 @@ impl Tracker {
         &self.rig
     }
 
+    /// The world reference in use (configured or estimated), None while still being estimated.
+    pub fn world(&self) -> Option<&WorldReference> {
+        self.world.as_ref()
+    }
+
+    /// The latest online world estimate with the time it was accepted, nanoseconds.
+    pub fn world_fit(&self) -> Option<&(u64, WorldFit)> {
+        self.world_fit.as_ref()
+    }
+
+    /// The filter's orientation at `t_ns`, once it is expressed in the camera frame.
+    fn orientation_at(&self, t_ns: u64) -> Option<nalgebra::UnitQuaternion<f64>> {
+        self.world?;
+        self.filter.get().orientation_at(t_ns)
+    }
+
+    /// The filter's pen direction at `t_ns`, once it is expressed in the camera frame.
+    fn filter_direction_at(&self, t_ns: u64) -> Option<Vector3<f64>> {
+        self.world?;
+        self.filter.get().direction_at(t_ns)
+    }
+
+    /// Takes a new online world estimate: the first one moves the filter into the camera frame
+    /// (`R` applied to its state); later ones refine the reference only.
+    fn accept_world_fit(&mut self, t_ns: u64, fit: WorldFit) {
+        let r = if self.world.is_none() {
+            fit.rotation()
+        } else {
+            nalgebra::UnitQuaternion::identity()
+        };
+        self.filter.get_mut().rebase(&r, fit.reference);
+        self.reckoner.set_world(fit.reference);
+        self.world = Some(fit.reference);
+        let first = self.world_fit.map_or(t_ns, |(t, _)| t);
+        self.world_fit = Some((first, fit));
+    }
+
     /// Feeds one IMU sample. While the tip is occluded this returns a dead-reckoned (or, after the
     /// time limit, lost) sample; otherwise None (frames produce the samples).
     pub fn push_imu(&mut self, sample: &ImuSample) -> Option<TrackSample> {
+        if let Some(e) = &mut self.world_estimator {
+            e.imu(sample);
+        }
         self.filter.get_mut().imu(sample);
-        if let Some(q) = self.filter.get().orientation_at(sample.t_ns) {
-            let world = &self.config.world;
+        if let (Some(q), Some(world)) = (self.orientation_at(sample.t_ns), self.world) {
             let linear = q * self.tip_specific_force(sample) - world.up() * world.gravity;
             self.tip_filter.push_accel(sample.t_ns, linear);
         }
@@ -331,8 +389,8 @@ impl Tracker {
         if !self.occluded {
             return None;
         }
-        let q = self.filter.get().orientation_at(sample.t_ns);
-        let direction = self.filter.get().direction_at(sample.t_ns);
+        let q = self.orientation_at(sample.t_ns);
+        let direction = self.filter_direction_at(sample.t_ns);
         Some(match self.reckoner.propagate(sample, q.as_ref()) {
             Some(tip) => TrackSample {
                 tip: Some(tip.into()),
@@ -579,7 +637,7 @@ impl Tracker {
             .last_vision_ns
             .is_some_and(|tv| t.saturating_sub(tv) <= self.config.fused_fresh_ns);
         if fresh {
-            self.filter.get().direction_at(t)
+            self.filter_direction_at(t)
         } else {
             None
         }
@@ -688,12 +746,34 @@ impl Tracker {
         t: u64,
         id: &super::identify::Identification,
     ) -> TrackSample {
-        self.observe_clock(this, id);
         let Ok(vision) = self.tip.estimate(&id.points) else {
             return self.no_vision_sample(t, IdentifyError::NoConsistentSet);
         };
+        // Only labels the geometry settled may calibrate the world: a prior from an
+        // uncalibrated filter could confirm its own error. Mirrored three-LED labellings that
+        // slipped through the distance test are outliers of the fit.
+        if id.resolution == Resolution::Geometry && id.count() >= 3 {
+            let fit = self
+                .world_estimator
+                .as_mut()
+                .and_then(|e| e.vision(t, &vision.direction));
+            if let Some(fit) = fit {
+                self.accept_world_fit(t, fit);
+            }
+        }
+        // Without a world reference there is no direction prior, and only the four-LED pattern
+        // (cross-ratio, no mirror image) is safe to report. Other labellings are kept for time
+        // alignment and continuity (a mirrored chain still tracks each blob consistently) but
+        // give no tip.
+        if self.world.is_none() && id.count() < LED_COUNT {
+            self.remember_labels(this, t, id, &vision);
+            return self.no_vision_sample(t, IdentifyError::Ambiguous);
+        }
+        self.observe_clock(this, id);
         let variance = self.direction_variance(id, &vision.direction);
-        self.filter.get_mut().vision(t, &vision.direction, variance);
+        if self.world.is_some() {
+            self.filter.get_mut().vision(t, &vision.direction, variance);
+        }
         let estimate = match (self.config.direction_source, self.fused_direction(t)) {
             (DirectionSource::Fused, Some(d)) => self
                 .tip
@@ -702,12 +782,7 @@ impl Tracker {
             _ => vision,
         };
         self.last_vision_ns = Some(t);
-        self.previous_leds = (t, id.points);
-        if let Some(c) = self.tip.pattern_centroid(estimate.pattern) {
-            let l = self.config.pen.led_offsets;
-            let all = l.map(|lk| estimate.centroid + estimate.direction * (c - lk));
-            self.pen_history = [Some((t, all)), self.pen_history[0]];
-        }
+        self.remember_labels(this, t, id, &estimate);
         self.reckoner.observe(t, &estimate.tip);
         self.occluded = false;
         let fused_axis = self.config.direction_source == DirectionSource::Fused
@@ -720,28 +795,6 @@ impl Tracker {
             estimate.tip
         };
         let cands = &self.correspondences.candidates;
-        let (own, other) = (
-            id.assignment.map(|a| {
-                a.map(|k| {
-                    if this == 0 {
-                        cands[k].left
-                    } else {
-                        cands[k].right
-                    }
-                })
-            }),
-            id.assignment.map(|a| {
-                a.map(|k| {
-                    if this == 0 {
-                        cands[k].right
-                    } else {
-                        cands[k].left
-                    }
-                })
-            }),
-        );
-        self.cameras[this].label_current(own);
-        self.cameras[1 - this].label_current(other);
         TrackSample {
             t_ns: t,
             tip: Some(tip.into()),
@@ -759,9 +812,34 @@ impl Tracker {
         }
     }
 
+    /// Keeps a labelled frame for the next frames: the LEDs for continuity, the whole pen for
+    /// predicting LED images, and each camera's blob labels for time alignment.
+    fn remember_labels(
+        &mut self,
+        this: usize,
+        t: u64,
+        id: &super::identify::Identification,
+        estimate: &super::tip::TipEstimate,
+    ) {
+        self.previous_leds = (t, id.points);
+        if let Some(c) = self.tip.pattern_centroid(estimate.pattern) {
+            let l = self.config.pen.led_offsets;
+            let all = l.map(|lk| estimate.centroid + estimate.direction * (c - lk));
+            self.pen_history = [Some((t, all)), self.pen_history[0]];
+        }
+        let cands = &self.correspondences.candidates;
+        let side = |left: bool| {
+            id.assignment
+                .map(|a| a.map(|k| if left { cands[k].left } else { cands[k].right }))
+        };
+        let (own, other) = (side(this == 0), side(this != 0));
+        self.cameras[this].label_current(own);
+        self.cameras[1 - this].label_current(other);
+    }
+
     fn no_vision_sample(&mut self, t: u64, _why: IdentifyError) -> TrackSample {
         self.occluded = true;
-        let direction = self.filter.get().direction_at(t);
+        let direction = self.filter_direction_at(t);
         match self.reckoner.current(t) {
             Some(tip) => TrackSample {
                 tip: Some(tip.into()),
@@ -834,6 +912,7 @@ mod tests {
         dead_reckoned: usize,
         lost: usize,
         clock_offset_ns: i64,
+        world_fit: Option<(u64, WorldFit)>,
     }
 
     /// 10 s of a moving pen: IMU at 200 Hz, each camera at 60 Hz with the right camera 7 ms late,
@@ -857,7 +936,7 @@ mod tests {
     ) -> RunStats {
         let rig = StereoRig::parallel(1024, 768, 45f64.to_radians(), 0.25);
         let pen = config.pen;
-        let world = config.world;
+        let world = IMU_WORLD.with(|w| w.get()).unwrap_or_default();
         let mut tracker = Tracker::new(rig.clone(), config).unwrap();
         let motion = PenMotion::drawing();
         let mut rng = SplitMix64::new(seed);
@@ -868,6 +947,7 @@ mod tests {
             dead_reckoned: 0,
             lost: 0,
             clock_offset_ns: 0,
+            world_fit: None,
         };
         let (imu_dt, cam_dt, right_delay) = (5_000_000u64, 16_666_667u64, 7_000_000u64);
         let mut events: Vec<(u64, u8)> = Vec::new();
@@ -943,6 +1023,7 @@ mod tests {
             }
         }
         stats.clock_offset_ns = tracker.clock_offset_ns();
+        stats.world_fit = tracker.world_fit().copied();
         stats
     }
 
@@ -977,6 +1058,49 @@ mod tests {
     thread_local! {
         /// Hide LED 1 in both cameras (the thesis's tip experiment: tip from LEDs 2-4).
         static HIDE_LED1: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+        /// The physical world reference the synthetic IMU senses (default: the default reference).
+        static IMU_WORLD: std::cell::Cell<Option<WorldReference>> = const { std::cell::Cell::new(None) };
+    }
+
+    /// A rig pitched 25 degrees down and rolled 10 degrees, facing an arbitrary heading: the online
+    /// estimate must find its world reference, and then track as well as with the true one.
+    #[test]
+    fn the_world_reference_is_estimated_during_the_session() {
+        let tilt = nalgebra::UnitQuaternion::from_euler_angles(0.44, 0.17, 2.3);
+        let d = WorldReference::default();
+        let physical = WorldReference {
+            up: (tilt * d.up()).into(),
+            magnetic: (tilt * d.magnetic()).into(),
+            gravity: d.gravity,
+        };
+        IMU_WORLD.with(|w| w.set(Some(physical)));
+        let known = TrackerConfig {
+            world: Some(physical),
+            ..TrackerConfig::default()
+        };
+        let mut with_truth = simulate(known, 10.0, None, 8);
+        let mut estimated = simulate(TrackerConfig::default(), 10.0, None, 8);
+        IMU_WORLD.with(|w| w.set(None));
+        let (t_fit, fit) = estimated.world_fit.expect("an estimate");
+        let up_error = fit.reference.up().angle(&physical.up());
+        eprintln!(
+            "world accepted at {:.2} s: up error {:.3} deg, {} pairs, residual {:.2} deg",
+            t_fit as f64 * 1e-9,
+            up_error.to_degrees(),
+            fit.pairs,
+            fit.residual_rms.to_degrees()
+        );
+        assert!(t_fit < 4_000_000_000, "accepted within 4 s");
+        // The IMU-only filter's tilt lags by about gyro bias / gravity gain (0.02 rad/s over
+        // 1/s: 1.1 degrees) until its bias estimate converges.
+        assert!(up_error < 2f64.to_radians());
+        assert_eq!(estimated.wrong_labels, 0);
+        // After the first seconds the two runs track alike.
+        let (m_truth, m_est) = (
+            median(&mut with_truth.errors[600..]),
+            median(&mut estimated.errors[600..]),
+        );
+        assert!(m_est < 1.1 * m_truth, "{m_est} vs {m_truth}");
     }
 
     #[test]
@@ -1078,7 +1202,7 @@ mod tests {
         let rig = StereoRig::parallel(1024, 768, 45f64.to_radians(), 0.25);
         let pen = PenGeometry::thesis();
         let cfg = TrackerConfig::default();
-        let world = cfg.world;
+        let world = cfg.world.unwrap_or_default();
         let mut tracker = Tracker::new(rig.clone(), cfg).unwrap();
         let mut detector = BlobDetector::new(BlobConfig::default());
         let motion = PenMotion::drawing();

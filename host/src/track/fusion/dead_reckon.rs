@@ -74,6 +74,11 @@ impl TipDeadReckoner {
         }
     }
 
+    /// Replaces the world reference (gravity direction) used to remove gravity.
+    pub fn set_world(&mut self, world: WorldReference) {
+        self.world = world;
+    }
+
     /// A vision tip at `t_ns` (updates position and velocity).
     pub fn observe(&mut self, t_ns: u64, tip: &Vector3<f64>) {
         if !tip.iter().all(|v| v.is_finite()) {

@@ -17,12 +17,14 @@ pub mod imu;
 pub mod orientation;
 pub mod thesis_kalman;
 pub mod tip_filter;
+pub mod world_estimate;
 
 pub use dead_reckon::{DeadReckonConfig, TipDeadReckoner};
 pub use imu::{ImuSample, ImuScale, WorldReference};
 pub use orientation::{OrientationConfig, OrientationFilter};
 pub use thesis_kalman::{ThesisKalman, ThesisKalmanConfig};
 pub use tip_filter::{TipFilter, TipFilterConfig};
+pub use world_estimate::{WorldEstimateConfig, WorldEstimator, WorldFit};
 
 use nalgebra::Vector3;
 
@@ -47,4 +49,7 @@ pub trait DirectionFilter {
     fn direction_at(&self, t_ns: u64) -> Option<Vector3<f64>>;
     /// World-from-pen orientation at `t_ns` if the filter has one (the thesis filter has none).
     fn orientation_at(&self, t_ns: u64) -> Option<nalgebra::UnitQuaternion<f64>>;
+    /// Moves the filter to a new world frame: `new_from_old` rotates its state, `world` is the
+    /// reference in the new frame ([`world_estimate`] finds both during a session).
+    fn rebase(&mut self, new_from_old: &nalgebra::UnitQuaternion<f64>, world: WorldReference);
 }

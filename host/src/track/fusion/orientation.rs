@@ -267,6 +267,14 @@ impl DirectionFilter for OrientationFilter {
         self.orientation_at(t_ns).map(|q| q * Vector3::x())
     }
 
+    fn rebase(&mut self, new_from_old: &UnitQuaternion<f64>, world: WorldReference) {
+        self.q = new_from_old * self.q;
+        for (_, q) in self.history.iter_mut() {
+            *q = new_from_old * *q;
+        }
+        self.world = world;
+    }
+
     fn orientation_at(&self, t_ns: u64) -> Option<UnitQuaternion<f64>> {
         if !self.initialised {
             return None;

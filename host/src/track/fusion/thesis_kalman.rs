@@ -217,6 +217,12 @@ impl DirectionFilter for ThesisKalman {
     fn orientation_at(&self, _t_ns: u64) -> Option<nalgebra::UnitQuaternion<f64>> {
         None
     }
+
+    /// The angle state is defined by the world's horizontal basis: it restarts in the new frame
+    /// (the next IMU sample reinitialises it).
+    fn rebase(&mut self, _new_from_old: &nalgebra::UnitQuaternion<f64>, world: WorldReference) {
+        *self = Self::new(self.config, world);
+    }
 }
 
 #[cfg(test)]
