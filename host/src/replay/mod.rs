@@ -10,6 +10,7 @@
 pub mod bar;
 pub mod imu_stream;
 pub mod plot;
+pub mod plot_text;
 pub mod report;
 pub mod rig;
 pub mod run;

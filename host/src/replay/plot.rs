@@ -1,12 +1,17 @@
 //! Plots of replay results as PNG images, drawn with `plotters`' bitmap backend.
 //!
-//! The images carry no text (no font is needed, so nothing depends on the system's fonts): the axes start at
-//! zero, grey grid lines mark the tick steps that [`PlotScale`] reports (and `report.json` repeats), and the
-//! red line marks the 2 mm accuracy target.
+//! Text comes from a built-in pixel font ([`super::plot_text`]), so nothing depends on the system's fonts:
+//! the axes start at zero and carry their tick values and titles, grey grid lines mark the tick steps that
+//! [`PlotScale`] reports (and `report.json` repeats), and the red line marks the 2 mm accuracy target.
 
 use std::path::Path;
 
 use plotters::prelude::*;
+
+use super::plot_text::{draw_text, text_width, tick_label, GLYPH};
+
+/// Image pixels per font pixel of the labels.
+const TEXT_SCALE: i32 = 2;
 
 /// Size of the tip-error plot, pixels (width, height).
 pub const TIP_ERROR_SIZE: (u32, u32) = (1000, 500);
@@ -14,7 +19,7 @@ pub const TIP_ERROR_SIZE: (u32, u32) = (1000, 500);
 /// The accuracy target drawn as a red line, millimetres.
 pub const TARGET_MM: f64 = 2.0;
 
-/// The scale of a written plot, since the image itself has no labels.
+/// The scale of a written plot (also written to `report.json`).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct PlotScale {
     /// The x axis spans 0..x_max_s seconds.
@@ -75,6 +80,9 @@ pub fn tip_error_png(path: &Path, points: &[(f64, f64)]) -> Result<PlotScale, Pl
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let mut chart = ChartBuilder::on(&root)
         .margin(20)
+        .margin_top(44)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
         .build_cartesian_2d(0f64..x_max, 0f64..y_max)
         .map_err(|e| err(&e))?;
     let grid = RGBColor(215, 215, 215);
@@ -122,6 +130,45 @@ pub fn tip_error_png(path: &Path, points: &[(f64, f64)]) -> Result<PlotScale, Pl
             RED.stroke_width(2),
         )))
         .map_err(|e| err(&e))?;
+    let px = |x: f64, y: f64| chart.backend_coord(&(x, y));
+    let ink = RGBColor(40, 40, 40);
+    // Tick values, every k-th tick so that neighbouring labels keep a gap.
+    let widest = text_width(&tick_label(x_max, x_tick), TEXT_SCALE) + 12;
+    let tick_px = (px(x_tick, 0.0).0 - px(0.0, 0.0).0).max(1);
+    let every = ((widest + tick_px - 1) / tick_px).max(1) as usize;
+    for x in ticks(x_tick, x_max).step_by(every) {
+        let label = tick_label(x, x_tick);
+        let (cx, bottom) = px(x, 0.0);
+        let at = (cx - text_width(&label, TEXT_SCALE) / 2, bottom + 8);
+        draw_text(&root, &label, at, TEXT_SCALE, ink).map_err(|e| err(&e))?;
+    }
+    let glyph_h = GLYPH.1 * TEXT_SCALE;
+    for y in ticks(y_tick, y_max) {
+        let label = tick_label(y, y_tick);
+        let (left, cy) = px(0.0, y);
+        let at = (left - text_width(&label, TEXT_SCALE) - 8, cy - glyph_h / 2);
+        draw_text(&root, &label, at, TEXT_SCALE, ink).map_err(|e| err(&e))?;
+    }
+    let (left, top) = px(0.0, y_max);
+    let (right, bottom) = px(x_max, 0.0);
+    draw_text(
+        &root,
+        "tip error (mm)",
+        (left, top - glyph_h - 12),
+        TEXT_SCALE,
+        ink,
+    )
+    .map_err(|e| err(&e))?;
+    let title = "time (s)";
+    let at = (
+        right - text_width(title, TEXT_SCALE),
+        bottom + 8 + glyph_h + 8,
+    );
+    draw_text(&root, title, at, TEXT_SCALE, ink).map_err(|e| err(&e))?;
+    let target = "2 mm target";
+    let (_, ty) = px(x_max, TARGET_MM);
+    let at = (right - text_width(target, TEXT_SCALE) - 6, ty - glyph_h - 6);
+    draw_text(&root, target, at, TEXT_SCALE, RED).map_err(|e| err(&e))?;
     root.present().map_err(|e| err(&e))?;
     Ok(PlotScale {
         x_max_s: x_max,
