@@ -100,6 +100,8 @@ pub struct LiveSummary {
     pub world: Option<crate::track::fusion::WorldReference>,
     /// The online estimate behind `world`, when it was estimated.
     pub world_fit: Option<crate::track::fusion::WorldFit>,
+    /// The magnetometer's hard-iron offset, when the session calibrated it.
+    pub mag_offset: Option<crate::track::fusion::MagOffset>,
     /// The recording written, if any.
     pub recording: Option<PathBuf>,
     /// Wall time, seconds.
@@ -385,6 +387,7 @@ pub fn run_live(
     }
     summary.world = session.tracker().world().copied();
     summary.world_fit = session.tracker().world_fit().map(|(_, f)| *f);
+    summary.mag_offset = session.tracker().mag_offset().copied();
     session.finish(out.samples.last().map_or(0, |s| s.track.t_ns));
     out.strokes = session.into_strokes();
     summary.strokes = out.strokes.len() as u64;

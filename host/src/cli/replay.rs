@@ -144,6 +144,7 @@ fn report(
         "strokes": out.strokes.len(),
         "world_reference": out.world_reference,
         "world": world_report(out, reader.world_truth()?.map(|w| world_reference(&w)).as_ref()),
+        "magnetometer": mag_report(out, reader.world_truth()?.as_ref()),
         "link": {
             "bytes": out.imu.bytes,
             "sensor_frames": link.sensor_frames,
@@ -185,6 +186,29 @@ fn report(
         }
     }
     Ok(report)
+}
+
+/// The hard-iron offset found in the session and, with ground truth, its error (microtesla).
+fn mag_report(out: &ReplayOutput, truth: Option<&fires_record::WorldTruth>) -> serde_json::Value {
+    let Some(o) = &out.mag_offset else {
+        return serde_json::json!({ "calibrated": false });
+    };
+    let mut r = serde_json::json!({
+        "calibrated": true,
+        "hard_iron": o.hard_iron,
+        "field": o.field,
+        "sigma_of_field": o.sigma,
+        "samples": o.samples,
+    });
+    if let Some(t) = truth {
+        // Readings are in microtesla (the recording's scale factors), the truth in tesla.
+        let err: f64 = (0..3)
+            .map(|k| (o.hard_iron[k] - t.hard_iron_t[k] * 1e6).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        r["hard_iron_error"] = err.into();
+    }
+    r
 }
 
 pub(crate) fn write_json(path: &Path, value: &serde_json::Value) -> anyhow::Result<()> {

@@ -9,7 +9,7 @@ use super::rig::{imu_scale, pen_geometry, stereo_rig, MetaError};
 pub use crate::session::StrokeOut;
 use crate::session::{Session, StrokeConfig};
 use crate::stereo::CameraId;
-use crate::track::fusion::{WorldFit, WorldReference};
+use crate::track::fusion::{MagOffset, WorldFit, WorldReference};
 use crate::track::pipeline::{CameraFrame, TrackSample, Tracker, TrackerConfig};
 use crate::vision::{BlobConfig, BlobDetector, GrayImage};
 
@@ -111,6 +111,8 @@ pub struct ReplayOutput {
     pub world_reference: &'static str,
     /// The online world estimate (time accepted, fit) when it was estimated.
     pub world_fit: Option<(u64, WorldFit)>,
+    /// The magnetometer's hard-iron offset, when the session calibrated it.
+    pub mag_offset: Option<MagOffset>,
 }
 
 /// The latest frame of a camera: its index and blob positions.
@@ -228,6 +230,7 @@ pub fn replay(
     }
     session.finish(samples.last().map_or(0, |s: &TrackSample| s.t_ns));
     let world_fit = session.tracker().world_fit().copied();
+    let mag_offset = session.tracker().mag_offset().copied();
     times.strokes_ns = session.strokes_ns();
     let strokes = session.into_strokes();
     Ok(ReplayOutput {
@@ -241,6 +244,7 @@ pub fn replay(
         wall_ns: wall.elapsed().as_nanos() as u64,
         world_reference,
         world_fit,
+        mag_offset,
     })
 }
 

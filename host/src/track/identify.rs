@@ -147,6 +147,12 @@ pub struct IdentifyPrior {
     pub direction: Option<Vector3<f64>>,
     /// LED positions labelled in the previous frame (if recent).
     pub previous: [Option<Vector3<f64>>; LED_COUNT],
+    /// Expected error of `direction`, radians (`None`: [`IdentifyConfig::prior_sigma`]); an
+    /// orientation filter without recent vision is less certain than one corrected a frame ago.
+    pub direction_sigma: Option<f64>,
+    /// Largest common scale error this frame's triangulation can have (from the exposure time
+    /// difference of its two images), at most [`IdentifyConfig::twin_scale_max`] (`None`: that).
+    pub scale_error_max: Option<f64>,
 }
 
 /// What decided between competing labellings.
@@ -241,6 +247,8 @@ pub struct Identifier {
     noise: Option<RangeNoise>,
     geometry: Option<ImageGeometry>,
     hypotheses: Vec<Hypothesis>,
+    /// The twin scale bound of the frame being identified.
+    twin_scale: f64,
 }
 
 impl Identifier {
@@ -254,6 +262,7 @@ impl Identifier {
             noise: None,
             geometry: None,
             hypotheses: Vec::with_capacity(64),
+            twin_scale: config.twin_scale_max,
         })
     }
 
@@ -428,6 +437,12 @@ impl Identifier {
         if cands.len() < 2 {
             return Err(IdentifyError::TooFewCandidates);
         }
+        self.twin_scale = prior
+            .scale_error_max
+            .filter(|s| s.is_finite() && *s >= 1.0)
+            .map_or(self.config.twin_scale_max, |s| {
+                s.min(self.config.twin_scale_max)
+            });
         self.collect_hypotheses(cands);
         if let Some(dir) = prior.direction {
             // Labellings that disagree with the fused direction (beyond its noise and theirs)
@@ -438,7 +453,7 @@ impl Identifier {
                 .map(|h| {
                     let v = labelled_direction(&labelled_points(cands, &h.assignment));
                     v.is_some_and(|v| {
-                        v.dot(&dir) >= self.prior_cos(cands, &h.assignment) * dir.norm()
+                        v.dot(&dir) >= self.prior_cos(cands, &h.assignment, prior) * dir.norm()
                     })
                 })
                 .collect();
@@ -689,7 +704,7 @@ impl Identifier {
         let measured = pairs.map(|(a, b)| (labelled[a].1.point - labelled[b].1.point).norm());
         let bands = pairs
             .map(|(a, b)| self.band_at(labelled[a].1, labelled[b].1, self.config.accept_sigmas));
-        let max_scale = self.config.twin_scale_max;
+        let max_scale = self.twin_scale;
         (0u8..16)
             .filter(|s| s.count_ones() == 3)
             .map(|s| {
@@ -861,7 +876,12 @@ impl Identifier {
 
     /// Cosine threshold for agreeing with the direction prior: `prior_min_cos`, tightened with the
     /// rig noise to `3 σ_angle + prior_sigma` of the labelled end points (at least 3 degrees).
-    fn prior_cos(&self, cands: &[Candidate], assignment: &[Option<usize>; LED_COUNT]) -> f64 {
+    fn prior_cos(
+        &self,
+        cands: &[Candidate],
+        assignment: &[Option<usize>; LED_COUNT],
+        prior: &IdentifyPrior,
+    ) -> f64 {
         let (Some(p), Some(q)) = (
             assignment.iter().flatten().next(),
             assignment.iter().rev().flatten().next(),
@@ -871,7 +891,11 @@ impl Identifier {
         let Some(sigma) = self.direction_sigma(&cands[*p], &cands[*q]) else {
             return self.config.prior_min_cos;
         };
-        let limit = (3.0 * sigma + self.config.prior_sigma).max(3f64.to_radians());
+        let prior_sigma = prior
+            .direction_sigma
+            .filter(|s| s.is_finite() && *s >= 0.0)
+            .unwrap_or(self.config.prior_sigma);
+        let limit = (3.0 * sigma + prior_sigma).max(3f64.to_radians());
         limit.cos().max(self.config.prior_min_cos)
     }
 
@@ -904,7 +928,7 @@ impl Identifier {
             let Some(v) = labelled_direction(&pts) else {
                 return false;
             };
-            if v.dot(&dir) < self.prior_cos(cands, &h.assignment) * dir.norm() {
+            if v.dot(&dir) < self.prior_cos(cands, &h.assignment, prior) * dir.norm() {
                 return false;
             }
         }
@@ -1079,6 +1103,7 @@ mod tests {
                 let prior = IdentifyPrior {
                     direction: Some(pose.direction()),
                     previous: continuity_for_triples(mask, &pose),
+                    ..Default::default()
                 };
                 let r = id.identify(&c, &prior).unwrap();
                 assert_eq!(r.mask(), mask);
@@ -1120,6 +1145,7 @@ mod tests {
             let continuity = IdentifyPrior {
                 direction: None,
                 previous: continuity_for_triples(mask, &pose),
+                ..Default::default()
             };
             let r = id.identify(&c, &continuity).unwrap();
             assert_eq!((r.count(), wrong_labels(&r, &truth)), (3, 0));
@@ -1130,6 +1156,7 @@ mod tests {
         let prior = IdentifyPrior {
             direction: None,
             previous: leds.map(Some),
+            ..Default::default()
         };
         let r = id.identify(&c, &prior).unwrap();
         assert_eq!(wrong_labels(&r, &truth), 0);
@@ -1165,6 +1192,7 @@ mod tests {
                     let prior = IdentifyPrior {
                         direction: Some(pose.direction()),
                         previous: continuity_for_triples(mask, &pose),
+                        ..Default::default()
                     };
                     frames += 1;
                     if let Ok(r) = id.identify(&c, &prior) {

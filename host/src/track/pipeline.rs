@@ -15,9 +15,10 @@
 //! it the same way. Push everything in arrival order; each stream must be time-ordered.
 
 use super::fusion::{
-    DeadReckonConfig, DirectionFilter, FusionKind, ImuSample, OrientationConfig, OrientationFilter,
-    ThesisKalman, ThesisKalmanConfig, TipDeadReckoner, TipFilter, TipFilterConfig,
-    WorldEstimateConfig, WorldEstimator, WorldFit, WorldReference,
+    DeadReckonConfig, DirectionFilter, FusionKind, ImuSample, MagCalibrationConfig, MagCalibrator,
+    MagOffset, OrientationConfig, OrientationFilter, ThesisKalman, ThesisKalmanConfig,
+    TipDeadReckoner, TipFilter, TipFilterConfig, WorldEstimateConfig, WorldEstimator, WorldFit,
+    WorldReference,
 };
 use super::identify::{Identifier, IdentifyConfig, IdentifyError, IdentifyPrior, Resolution};
 use super::pen::{PenError, PenGeometry, LED_COUNT};
@@ -61,6 +62,8 @@ pub struct TrackerConfig {
     pub world: Option<WorldReference>,
     /// When the online world estimate is accepted.
     pub world_estimate: WorldEstimateConfig,
+    /// Online hard-iron calibration of the magnetometer.
+    pub mag_calibration: MagCalibrationConfig,
     /// Occlusion handling.
     pub dead_reckon: DeadReckonConfig,
     /// Tip position filter (constant velocity + IMU acceleration).
@@ -76,9 +79,16 @@ pub struct TrackerConfig {
     pub right_clock_offset_ns: i64,
     /// Move the other camera's blobs to the frame time using their image velocity.
     pub time_align: bool,
+    /// A labelling is refused when two of the pen's LEDs image closer than this in either camera,
+    /// pixels: the spots overlap (pen pointing at a camera), so which blob is which LED is a guess.
+    pub min_image_separation_px: f64,
     /// Estimate the residual right-camera clock offset online from the epipolar residuals of
     /// moving labelled LEDs (needs `time_align`), and add it to `right_clock_offset_ns`.
     pub estimate_clock_offset: bool,
+    /// Fastest pen motion expected, metres per second: with the time between a pair's two
+    /// exposures it bounds the triangulation's scale error (`1 + v Δt / baseline`), which decides
+    /// whether two three-LED patterns that differ only in scale can be confused.
+    pub max_pen_speed_mps: f64,
     /// Labelled frames per clock-offset update.
     pub clock_window: usize,
     /// Required precision of one clock-offset update, nanoseconds (else the window is discarded).
@@ -89,6 +99,13 @@ pub struct TrackerConfig {
     pub continuity_ns: u64,
     /// The fused direction counts as vision-corrected for this long, nanoseconds.
     pub fused_fresh_ns: u64,
+    /// After that, the filter's direction still serves identification as a prior whose
+    /// expected error grows by this much per second (gyro drift against the gravity and
+    /// heading corrections), radians per second...
+    pub stale_prior_growth: f64,
+    /// ...up to this error, radians (the IMU-only orientation's error bound with a calibrated
+    /// world reference); a value of 0 disables the stale prior.
+    pub stale_prior_max: f64,
 }
 
 impl Default for TrackerConfig {
@@ -103,6 +120,7 @@ impl Default for TrackerConfig {
             thesis_kalman: ThesisKalmanConfig::default(),
             world: None,
             world_estimate: WorldEstimateConfig::default(),
+            mag_calibration: MagCalibrationConfig::default(),
             dead_reckon: DeadReckonConfig::default(),
             tip_filter: TipFilterConfig::default(),
             imu_to_tip: [0.0; 3],
@@ -110,12 +128,16 @@ impl Default for TrackerConfig {
             max_pair_dt_ns: 40_000_000,
             right_clock_offset_ns: 0,
             time_align: true,
+            min_image_separation_px: 4.0,
+            max_pen_speed_mps: 1.5,
             estimate_clock_offset: true,
             clock_window: 30,
             clock_precision_ns: 1_000_000.0,
             max_blob_motion_px: 40.0,
             continuity_ns: 100_000_000,
             fused_fresh_ns: 200_000_000,
+            stale_prior_growth: 0.05,
+            stale_prior_max: 0.07,
         }
     }
 }
@@ -277,6 +299,7 @@ pub struct Tracker {
     world: Option<WorldReference>,
     world_estimator: Option<WorldEstimator>,
     world_fit: Option<(u64, WorldFit)>,
+    mag: MagCalibrator,
 }
 
 impl Tracker {
@@ -323,6 +346,7 @@ impl Tracker {
             world: config.world,
             world_estimator,
             world_fit: None,
+            mag: MagCalibrator::new(config.mag_calibration),
             config,
         })
     }
@@ -345,6 +369,30 @@ impl Tracker {
     /// The latest online world estimate with the time it was accepted, nanoseconds.
     pub fn world_fit(&self) -> Option<&(u64, WorldFit)> {
         self.world_fit.as_ref()
+    }
+
+    /// The magnetometer's hard-iron offset, once calibrated.
+    pub fn mag_offset(&self) -> Option<&MagOffset> {
+        self.mag.offset()
+    }
+
+    /// The sample with the magnetometer's hard-iron offset removed (once known); a newly
+    /// accepted offset restarts the world estimate, whose Earth frame takes its heading from
+    /// the magnetometer.
+    fn calibrated_mag(&mut self, sample: &ImuSample) -> ImuSample {
+        let raw = Vector3::from(sample.mag);
+        if self.mag.push(&raw).is_some() {
+            if let Some(e) = &mut self.world_estimator {
+                e.restart();
+            }
+        }
+        match self.mag.offset() {
+            Some(o) => ImuSample {
+                mag: o.correct(&raw).into(),
+                ..*sample
+            },
+            None => *sample,
+        }
     }
 
     /// The filter's orientation at `t_ns`, once it is expressed in the camera frame.
@@ -377,6 +425,7 @@ impl Tracker {
     /// Feeds one IMU sample. While the tip is occluded this returns a dead-reckoned (or, after the
     /// time limit, lost) sample; otherwise None (frames produce the samples).
     pub fn push_imu(&mut self, sample: &ImuSample) -> Option<TrackSample> {
+        let sample = &self.calibrated_mag(sample);
         if let Some(e) = &mut self.world_estimator {
             e.imu(sample);
         }
@@ -472,8 +521,17 @@ impl Tracker {
     /// Stereo → identification → tip → fusion for the newest frame of camera `this` at time `t`.
     fn process_pair(&mut self, this: usize, t: u64) -> TrackSample {
         self.prepare_points(this, t);
+        let (direction, direction_sigma) = self.direction_prior(t).unzip();
+        let pair_dt = self.cameras[1 - this]
+            .current
+            .as_ref()
+            .map_or(0, |f| f.t_ns.abs_diff(t));
+        let scale_error_max = 1.0
+            + self.config.max_pen_speed_mps * pair_dt as f64 * 1e-9 / self.rig.baseline().max(1e-6);
         let prior = IdentifyPrior {
-            direction: self.fused_direction(t),
+            direction,
+            direction_sigma,
+            scale_error_max: Some(scale_error_max),
             previous: if t.saturating_sub(self.previous_leds.0) <= self.config.continuity_ns {
                 self.previous_leds.1
             } else {
@@ -488,10 +546,24 @@ impl Tracker {
             left,
             right,
         );
+        let stale = direction_sigma.is_some_and(|s| s > self.config.identify.prior_sigma);
         match self
             .identifier
             .identify_with_images(cands, &prior, left, right)
         {
+            // Two LEDs are one distance: with only a stale direction to check it, a wrong stereo
+            // pair at that distance (LED images a few pixels apart) would pass.
+            Ok(id) if stale && id.count() < 3 => self.no_vision_sample(t, IdentifyError::Ambiguous),
+            // ...and a pair shifted by one LED in one image (LED images a few pixels apart when
+            // the pen points at a camera or turns fast) also fits: two LEDs need the fused
+            // direction and temporal continuity (§4.1.2), i.e. must sit where the pen's recent
+            // motion predicts them.
+            Ok(id) if id.count() < 3 && !self.labels_match_prediction(this, t, &id) => {
+                self.no_vision_sample(t, IdentifyError::Ambiguous)
+            }
+            Ok(id) if !(self.pen_images_separated(&id) && self.labelled_blobs_isolated(&id)) => {
+                self.no_vision_sample(t, IdentifyError::Ambiguous)
+            }
             Ok(id) => self.vision_sample(this, t, &id),
             Err(e) => self.no_vision_sample(t, e),
         }
@@ -577,6 +649,109 @@ impl Tracker {
         out
     }
 
+    /// True when no other blob lies within `min_image_separation_px` of a labelled blob, in
+    /// either camera's frame.
+    fn labelled_blobs_isolated(&self, id: &super::identify::Identification) -> bool {
+        let cands = &self.correspondences.candidates;
+        let min2 = self.config.min_image_separation_px.powi(2);
+        let isolated = |cam: usize, b: usize| {
+            let Some(frame) = &self.cameras[cam].current else {
+                return true;
+            };
+            let Some(p) = frame.blobs.get(b) else {
+                return true;
+            };
+            frame
+                .blobs
+                .iter()
+                .enumerate()
+                .all(|(j, q)| j == b || (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) >= min2)
+        };
+        id.assignment
+            .iter()
+            .flatten()
+            .filter_map(|&c| cands.get(c))
+            .all(|c| isolated(0, c.left) && isolated(1, c.right))
+    }
+
+    /// True when the images of every two of the pen's four LEDs (the labelled pen's model,
+    /// unlabelled LEDs included) are at least `min_image_separation_px` apart in both cameras.
+    fn pen_images_separated(&self, id: &super::identify::Identification) -> bool {
+        let Ok(pen) = self.tip.estimate(&id.points) else {
+            return false;
+        };
+        let Some(c) = self.tip.pattern_centroid(pen.pattern) else {
+            return false;
+        };
+        let leds = self
+            .config
+            .pen
+            .led_offsets
+            .map(|l| pen.centroid + pen.direction * (c - l));
+        let min2 = self.config.min_image_separation_px.powi(2);
+        [CameraId::Left, CameraId::Right].iter().all(|&camera| {
+            let px: Vec<[f64; 2]> = leds
+                .iter()
+                .filter_map(|p| self.rig.project(camera, p).ok())
+                .collect();
+            px.iter().enumerate().all(|(i, a)| {
+                px[i + 1..]
+                    .iter()
+                    .all(|b| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) >= min2)
+            })
+        })
+    }
+
+    /// True when the predicted LED images (constant-velocity pen motion) put every labelled blob
+    /// nearest its own LED's predicted image, in both cameras (the other camera's blobs moved to
+    /// `t`); false without a recent pen to predict from.
+    fn labels_match_prediction(
+        &self,
+        this: usize,
+        t: u64,
+        id: &super::identify::Identification,
+    ) -> bool {
+        let Some(leds) = self.predicted_leds(t) else {
+            return false;
+        };
+        let own: &[[f64; 2]] = self.cameras[this]
+            .current
+            .as_ref()
+            .map_or(&[], |f| f.blobs.as_slice());
+        let (left_px, right_px) = if this == 0 {
+            (own, self.aligned.as_slice())
+        } else {
+            (self.aligned.as_slice(), own)
+        };
+        let cands = &self.correspondences.candidates;
+        for (camera, blobs) in [(CameraId::Left, left_px), (CameraId::Right, right_px)] {
+            let Ok(px) = leds
+                .iter()
+                .map(|p| self.rig.project(camera, p))
+                .collect::<Result<Vec<_>, _>>()
+            else {
+                return true;
+            };
+            for (k, c) in id.assignment.iter().enumerate() {
+                let Some(c) = c.and_then(|c| cands.get(c)) else {
+                    continue;
+                };
+                let blob = if camera == CameraId::Left {
+                    c.left
+                } else {
+                    c.right
+                };
+                let Some(b) = blobs.get(blob) else { continue };
+                let d2 = |p: &[f64; 2]| (p[0] - b[0]).powi(2) + (p[1] - b[1]).powi(2);
+                let nearest = (0..LED_COUNT).min_by(|&i, &j| d2(&px[i]).total_cmp(&d2(&px[j])));
+                if nearest != Some(k) {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
     /// Blob index of every LED in a frame: its labels when a vision sample labelled it, otherwise
     /// the blob nearest each predicted LED image, accepted only when it is unambiguous (within a
     /// third of the smallest predicted LED spacing, and alone there).
@@ -630,6 +805,29 @@ impl Tracker {
             _ => Vector3::zeros(),
         };
         Some(std::array::from_fn(|k| p1[k] + velocity(k) * dt))
+    }
+
+    /// The filter's pen direction as an identification prior, with its expected error: the
+    /// configured `prior_sigma` while vision corrected it within `fused_fresh_ns`, then growing
+    /// by `stale_prior_growth` per second up to `stale_prior_max`. Without it a three-LED pen
+    /// that lost the track could never be relabelled (its mirror image fits the distances).
+    /// None until the world reference is known.
+    fn direction_prior(&self, t: u64) -> Option<(Vector3<f64>, f64)> {
+        let d = self.filter_direction_at(t)?;
+        let base = self.config.identify.prior_sigma;
+        let age = self
+            .last_vision_ns
+            .map_or(u64::MAX, |tv| t.saturating_sub(tv));
+        if age <= self.config.fused_fresh_ns {
+            return Some((d, base));
+        }
+        if self.config.stale_prior_max <= 0.0 {
+            return None;
+        }
+        let stale_s = (age - self.config.fused_fresh_ns) as f64 * 1e-9;
+        let sigma =
+            (base + self.config.stale_prior_growth * stale_s).min(self.config.stale_prior_max);
+        Some((d, sigma.max(base)))
     }
 
     fn fused_direction(&self, t: u64) -> Option<Vector3<f64>> {
@@ -907,6 +1105,8 @@ mod tests {
 
     struct RunStats {
         errors: Vec<f64>,
+        /// Times (seconds) of the vision samples, parallel to `errors`.
+        vision_t: Vec<f64>,
         wrong_labels: usize,
         samples: usize,
         dead_reckoned: usize,
@@ -938,10 +1138,11 @@ mod tests {
         let pen = config.pen;
         let world = IMU_WORLD.with(|w| w.get()).unwrap_or_default();
         let mut tracker = Tracker::new(rig.clone(), config).unwrap();
-        let motion = PenMotion::drawing();
+        let motion = MOTION.with(|m| m.get()).unwrap_or_else(PenMotion::drawing);
         let mut rng = SplitMix64::new(seed);
         let mut stats = RunStats {
             errors: Vec::new(),
+            vision_t: Vec::new(),
             wrong_labels: 0,
             samples: 0,
             dead_reckoned: 0,
@@ -1008,6 +1209,7 @@ mod tests {
                     stats
                         .errors
                         .push((Vector3::from(s.tip.unwrap()) - tip).norm());
+                    stats.vision_t.push(s.t_ns as f64 * 1e-9);
                     let leds = pen.led_positions(&truth.led1, &truth.rotation);
                     // A label is wrong when the point is nearer another LED than its own.
                     for (i, p) in s.leds.iter().enumerate() {
@@ -1060,6 +1262,8 @@ mod tests {
         static HIDE_LED1: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
         /// The physical world reference the synthetic IMU senses (default: the default reference).
         static IMU_WORLD: std::cell::Cell<Option<WorldReference>> = const { std::cell::Cell::new(None) };
+        /// The pen's motion (default: [`PenMotion::drawing`]).
+        static MOTION: std::cell::Cell<Option<PenMotion>> = const { std::cell::Cell::new(None) };
     }
 
     /// A rig pitched 25 degrees down and rolled 10 degrees, facing an arbitrary heading: the online
@@ -1355,6 +1559,81 @@ mod tests {
                 proptest::prop_assert!(o.leds.iter().all(|p| finite(*p)));
             }
         }
+    }
+
+    /// A three-LED pen (LED 1 dark) hidden for 1 s: afterwards neither the fresh fused direction
+    /// nor continuity exist, and LEDs 2-4 fit their mirror image. The filter's direction, kept by
+    /// gravity and the magnetometer, relabels it as a stale prior.
+    #[test]
+    fn a_three_led_pen_is_relabelled_after_an_occlusion() {
+        HIDE_LED1.with(|h| h.set(true));
+        // A rig believed four times noisier than it is: LEDs 2-4 then always fit their mirror
+        // image within the noise band, so geometry alone never labels them.
+        let mut known = TrackerConfig {
+            world: Some(WorldReference::default()),
+            ..TrackerConfig::default()
+        };
+        known.correspondence.pixel_sigma = 2.0;
+        let without = TrackerConfig {
+            stale_prior_max: 0.0,
+            ..known.clone()
+        };
+        let with_stale = simulate(known, 8.0, Some((4.0, 5.0)), 9);
+        let no_stale = simulate(without, 8.0, Some((4.0, 5.0)), 9);
+        HIDE_LED1.with(|h| h.set(false));
+        let after = |s: &RunStats| s.vision_t.iter().filter(|t| **t >= 5.0).count();
+        let first = |s: &RunStats| s.vision_t.iter().copied().find(|t| *t >= 5.0);
+        let (a, b) = (after(&with_stale), after(&no_stale));
+        let (fa, fb) = (first(&with_stale), first(&no_stale));
+        eprintln!("after the occlusion: {a} vision samples from {fa:?} s with the stale prior, {b} from {fb:?} s without");
+        assert_eq!(with_stale.wrong_labels, 0);
+        assert_eq!(no_stale.wrong_labels, 0);
+        // Relabelled at the first frames (60 frames/s per camera)...
+        assert!(fa.is_some_and(|t| t < 5.05), "{fa:?}");
+        assert!(a * 10 >= 2 * 180 * 8, "{a} of 360 frames");
+        // ...while without it the pen waits for a frame the geometry settles alone.
+        assert!(fb.is_none_or(|t| t > 5.3), "{fb:?}");
+        assert!(a > b, "{a} vs {b}");
+    }
+
+    /// The pen pointing straight at the left camera: its LED images fall on one another, and no
+    /// labelling is reported.
+    #[test]
+    fn a_pen_pointing_at_a_camera_gives_no_labels() {
+        let rig = StereoRig::parallel(1024, 768, 45f64.to_radians(), 0.25);
+        let pen = PenGeometry::thesis();
+        let cfg = TrackerConfig {
+            world: Some(WorldReference::default()),
+            time_align: false,
+            ..TrackerConfig::default()
+        };
+        let mut tracker = Tracker::new(rig.clone(), cfg).unwrap();
+        let mut rng = SplitMix64::new(4);
+        let mut labelled = 0;
+        for k in 1..60u64 {
+            // LED 1 at 0.6 m on the optical axis, the pen's back end tilted 3 degrees off it.
+            let tilt = 3f64.to_radians() + 0.0001 * k as f64;
+            let dir = Vector3::new(tilt.sin(), 0.0, -tilt.cos());
+            let rotation = nalgebra::UnitQuaternion::rotation_between(&Vector3::x(), &dir).unwrap();
+            let pose = crate::track::synth::PenPose {
+                led1: Vector3::new(0.0, 0.0, 0.6),
+                rotation,
+            };
+            let proj = project_leds(&rig, &pen, &pose, 0.3, &mut rng);
+            let t = k * 16_666_667;
+            for (i, camera) in [CameraId::Left, CameraId::Right].into_iter().enumerate() {
+                let blobs = proj[i].iter().flatten().copied().collect();
+                let out = tracker.push_frame(CameraFrame {
+                    camera,
+                    t_ns: t + i as u64 * 1_000_000,
+                    blobs,
+                });
+                if out.is_some_and(|s| s.labels.iter().any(Option::is_some)) {
+                    labelled += 1;
+                }
+            }
+        }
+        assert_eq!(labelled, 0);
     }
 
     #[test]

@@ -76,6 +76,7 @@ fn stress_no_wrong_label_is_ever_accepted() {
         let prior = IdentifyPrior {
             direction: Some(noisy_dir),
             previous: [None; LED_COUNT],
+            ..Default::default()
         };
         frames += 1;
         let Ok(res) = id.identify_with_images(cands, &prior, &l, &r) else {

@@ -14,6 +14,7 @@
 
 pub mod dead_reckon;
 pub mod imu;
+pub mod mag_calibration;
 pub mod orientation;
 pub mod thesis_kalman;
 pub mod tip_filter;
@@ -21,6 +22,7 @@ pub mod world_estimate;
 
 pub use dead_reckon::{DeadReckonConfig, TipDeadReckoner};
 pub use imu::{ImuSample, ImuScale, WorldReference};
+pub use mag_calibration::{MagCalibrationConfig, MagCalibrator, MagOffset};
 pub use orientation::{OrientationConfig, OrientationFilter};
 pub use thesis_kalman::{ThesisKalman, ThesisKalmanConfig};
 pub use tip_filter::{TipFilter, TipFilterConfig};

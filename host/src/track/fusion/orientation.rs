@@ -46,6 +46,10 @@ pub struct OrientationConfig {
     pub history_ns: u64,
     /// Gyro samples further apart than this are treated as a gap (no integration), nanoseconds.
     pub max_gap_ns: u64,
+    /// For this long after a vision correction the gravity and heading corrections act only about
+    /// the pen axis (the roll vision cannot see), nanoseconds: vision owns the axis direction,
+    /// which the magnetometer's soft iron and the hand's acceleration would otherwise pull away.
+    pub vision_owns_axis_ns: u64,
 }
 
 impl Default for OrientationConfig {
@@ -61,6 +65,7 @@ impl Default for OrientationConfig {
             startup_s: 1.0,
             history_ns: 250_000_000,
             max_gap_ns: 100_000_000,
+            vision_owns_axis_ns: 300_000_000,
         }
     }
 }
@@ -79,6 +84,7 @@ pub struct OrientationFilter {
     history: VecDeque<(u64, UnitQuaternion<f64>)>,
     /// Variance of the pen-axis direction per perpendicular axis, rad^2.
     p_var: f64,
+    last_vision_ns: Option<u64>,
 }
 
 impl OrientationFilter {
@@ -94,6 +100,7 @@ impl OrientationFilter {
             initialised: false,
             history: VecDeque::with_capacity(256),
             p_var: 1.0,
+            last_vision_ns: None,
         }
     }
 
@@ -206,7 +213,13 @@ impl DirectionFilter for OrientationFilter {
         }
         let dt = dt_ns as f64 * 1e-9;
         let boost = self.boost(s.t_ns);
-        let e = self.imu_error(s) * boost;
+        let mut e = self.imu_error(s) * boost;
+        let vision_recent = self
+            .last_vision_ns
+            .is_some_and(|tv| s.t_ns.saturating_sub(tv) <= self.config.vision_owns_axis_ns);
+        if vision_recent {
+            e = Vector3::x() * e.x;
+        }
         self.bias -= e * (self.config.k_bias * dt);
         let omega = Vector3::from(s.gyro) - self.bias + e;
         self.q *= UnitQuaternion::from_scaled_axis(omega * dt);
@@ -261,6 +274,7 @@ impl DirectionFilter for OrientationFilter {
         }
         self.q = corrected;
         self.bias -= now * self.config.vision_bias_gain;
+        self.last_vision_ns = Some(self.last_vision_ns.map_or(t_ns, |tv| tv.max(t_ns)));
     }
 
     fn direction_at(&self, t_ns: u64) -> Option<Vector3<f64>> {
@@ -349,6 +363,38 @@ mod tests {
         assert!(rms_imu < 0.06, "imu only {rms_imu}");
         let bias_err = (g.gyro_bias() - ImuNoise::default().gyro_bias).norm();
         assert!(bias_err < 0.01, "bias error {bias_err}");
+    }
+
+    /// The filter's magnetic reference 10 degrees off in heading (soft iron, a misjudged field):
+    /// with vision owning the axis, the heading pull no longer tilts the fused axis away.
+    #[test]
+    fn vision_owns_the_axis_against_a_biased_heading() {
+        let d = WorldReference::default();
+        let yaw = UnitQuaternion::from_axis_angle(
+            &nalgebra::Unit::new_normalize(d.up()),
+            10f64.to_radians(),
+        );
+        let biased = WorldReference {
+            magnetic: (yaw * d.magnetic()).into(),
+            ..d
+        };
+        let fights_cfg = OrientationConfig {
+            vision_owns_axis_ns: 0,
+            ..OrientationConfig::default()
+        };
+        let mut owns = OrientationFilter::new(OrientationConfig::default(), biased);
+        let mut fights = OrientationFilter::new(fights_cfg, biased);
+        let (e_owns, e_fights) = (
+            run(&mut owns, 20.0, 0.003, 0, 3),
+            run(&mut fights, 20.0, 0.003, 0, 3),
+        );
+        eprintln!(
+            "axis RMS error: {:.2} deg owning, {:.2} deg fighting",
+            e_owns.to_degrees(),
+            e_fights.to_degrees()
+        );
+        // Measured 0.37 against 0.56 degrees.
+        assert!(e_owns < 0.75 * e_fights, "{e_owns} vs {e_fights}");
     }
 
     #[test]

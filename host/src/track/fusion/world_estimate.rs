@@ -32,6 +32,11 @@ pub struct WorldEstimateConfig {
     pub min_pairs: usize,
     /// Required standard deviation of the worst-determined rotation axis, radians.
     pub target_sigma: f64,
+    /// Smallest spread of the pen axes about the worst-determined rotation axis (RMS sine of
+    /// their angle to it). The IMU-only frame's errors are not white (the magnetometer's heading
+    /// error follows the pen's orientation), and a fit amplifies them by the inverse of this
+    /// spread, which the statistical test alone does not see.
+    pub min_spread: f64,
     /// Pairs whose residual angle exceeds this after a fit are outliers, radians.
     pub outlier_angle: f64,
     /// Smallest inlier fraction for an estimate (protects against a fit to mislabelled frames).
@@ -49,6 +54,7 @@ impl Default for WorldEstimateConfig {
             min_interval_ns: 50_000_000,
             min_pairs: 20,
             target_sigma: 1.5f64.to_radians(),
+            min_spread: 0.2,
             outlier_angle: 15f64.to_radians(),
             min_inlier_fraction: 0.8,
             max_pairs: 4000,
@@ -73,6 +79,8 @@ pub struct WorldFit {
     pub residual_rms: f64,
     /// Standard deviation of the worst-determined rotation axis, radians.
     pub worst_axis_sigma: f64,
+    /// Spread of the pen axes about that rotation axis (RMS sine).
+    pub spread: f64,
 }
 
 impl WorldFit {
@@ -117,6 +125,16 @@ impl WorldEstimator {
             since_fit: 0,
             fit: None,
         }
+    }
+
+    /// Starts the pairs and the IMU-only filter afresh (e.g. once the magnetometer is
+    /// calibrated, the Earth frame's heading changes); the latest fit is kept.
+    pub fn restart(&mut self) {
+        self.imu_only = OrientationFilter::new(self.imu_only.config, self.earth);
+        self.first_imu_ns = None;
+        self.last_pair_ns = None;
+        self.pairs.clear();
+        self.since_fit = 0;
     }
 
     /// The IMU-only filter (Earth frame).
@@ -233,18 +251,20 @@ fn solve(
     // Per-axis variance of a direction residual (two perpendicular components), with a floor so
     // a perfect fit is not infinitely certain.
     let sigma2 = (sum_sq / (2.0 * n as f64)).max(1e-8);
-    let info: Matrix3<f64> = used
+    // Σ (I - d dᵀ): its smallest eigenvalue over n is the mean squared sine between the axes
+    // and the worst-determined rotation axis.
+    let scatter: Matrix3<f64> = used
         .iter()
         .map(|p| Matrix3::identity() - p.camera * p.camera.transpose())
-        .sum::<Matrix3<f64>>()
-        / sigma2;
-    let lambda_min = SymmetricEigen::new(info).eigenvalues.min();
+        .sum();
+    let lambda_min = SymmetricEigen::new(scatter).eigenvalues.min().max(0.0);
+    let spread = (lambda_min / n as f64).sqrt();
     let worst_axis_sigma = if lambda_min > 0.0 {
-        lambda_min.sqrt().recip()
+        (sigma2 / lambda_min).sqrt()
     } else {
         f64::INFINITY
     };
-    if worst_axis_sigma > config.target_sigma {
+    if worst_axis_sigma > config.target_sigma || spread < config.min_spread {
         return None;
     }
     let q = UnitQuaternion::from_rotation_matrix(&r);
@@ -259,6 +279,7 @@ fn solve(
         candidates: pairs.len(),
         residual_rms,
         worst_axis_sigma,
+        spread,
     })
 }
 
