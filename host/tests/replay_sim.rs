@@ -4,7 +4,8 @@
 use std::path::PathBuf;
 
 use fires_host::replay::bar::{bar_report, measure_bar, smooth_bar, BarSmoothing};
-use fires_host::replay::report::accuracy;
+use fires_host::replay::report::{accuracy, world_report};
+use fires_host::replay::run::world_reference;
 use fires_host::replay::{replay, ReplayConfig};
 use fires_host::stereo::TriangulationMethod;
 use fires_record::RecordingReader;
@@ -31,6 +32,13 @@ fn a_fires_v1_session_is_tracked_within_2mm_with_no_wrong_labels() {
     assert!(acc.frac_within_2mm > 0.9, "{acc:?}");
     assert!(acc.tip_rmse_mm < 2.0, "{acc:?}");
     assert_eq!(out.imu.stats.sensor_frames as usize, out.imu.samples.len());
+
+    // The world reference was estimated from the session itself, close to the simulated one.
+    let world = reader.world_truth().expect("truth").expect("simulated");
+    let w = world_report(&out, Some(&world_reference(&world)));
+    assert_eq!(w.source, "estimated");
+    assert!(w.accepted_after_s.is_some_and(|t| t < 5.0), "{w:?}");
+    assert!(w.up_error_deg.is_some_and(|e| e < 1.5), "{w:?}");
 
     // Replaying the same recording gives the same samples.
     let again = replay(&reader, &ReplayConfig::default()).expect("replay");
