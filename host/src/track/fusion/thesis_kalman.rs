@@ -218,10 +218,14 @@ impl DirectionFilter for ThesisKalman {
         None
     }
 
-    /// The angle state is defined by the world's horizontal basis: it restarts in the new frame
-    /// (the next IMU sample reinitialises it).
-    fn rebase(&mut self, _new_from_old: &nalgebra::UnitQuaternion<f64>, world: WorldReference) {
-        *self = Self::new(self.config, world);
+    /// The angle state is defined by the world's horizontal basis: a new frame restarts it (the
+    /// next IMU sample reinitialises it); a refined reference in the same frame is just taken.
+    fn rebase(&mut self, new_from_old: &nalgebra::UnitQuaternion<f64>, world: WorldReference) {
+        if new_from_old.angle() > 1e-9 {
+            *self = Self::new(self.config, world);
+        } else {
+            self.world = world;
+        }
     }
 }
 
