@@ -475,6 +475,9 @@ impl Identifier {
         if self.has_conflicting_rival(cands, &chosen, prior) {
             return Err(IdentifyError::Ambiguous);
         }
+        if self.switches_identity(cands, &chosen, prior) {
+            return Err(IdentifyError::Ambiguous);
+        }
         Ok(self.finish(cands, chosen, resolution))
     }
 
@@ -744,6 +747,29 @@ impl Identifier {
             }
         }
         compared
+    }
+
+    /// True when a labelled point lies within `continuity_max_jump` of where a *different* LED
+    /// was in the previous frame (and nearer it than any other): LEDs do not trade places between
+    /// frames, so the labelling contradicts continuity however well its distances fit (a depth
+    /// outlier can make LEDs 2-4 fit 1-3).
+    fn switches_identity(
+        &self,
+        cands: &[Candidate],
+        h: &Hypothesis,
+        prior: &IdentifyPrior,
+    ) -> bool {
+        let pts = labelled_points(cands, &h.assignment);
+        pts.iter().enumerate().any(|(label, p)| {
+            let Some(p) = p else { return false };
+            let nearest = prior
+                .previous
+                .iter()
+                .enumerate()
+                .filter_map(|(k, q)| q.map(|q| (k, (p - q).norm())))
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            nearest.is_some_and(|(k, d)| k != label && d < self.config.continuity_max_jump)
+        })
     }
 
     fn cross_ratio_ok(&self, pts: &[Option<Vector3<f64>>; LED_COUNT]) -> bool {
@@ -1121,6 +1147,30 @@ mod tests {
         } else {
             [None; LED_COUNT]
         }
+    }
+
+    /// LEDs 1-3 seen where LEDs 2-4 were a frame ago: the distances fit 1-3 exactly, but the
+    /// labels would trade places between frames, so the frame is refused; with the previous
+    /// frame agreeing, it is labelled.
+    #[test]
+    fn labels_that_trade_places_between_frames_are_refused() {
+        let mut rng = SplitMix64::new(8);
+        let pen = PenGeometry::thesis();
+        let mut id = Identifier::new(pen, IdentifyConfig::default()).unwrap();
+        let pose = PenPose::random(&mut rng, 0.5, 0.7, 0.3);
+        let leds = pen.led_positions(&pose.led1, &pose.rotation);
+        let c = candidates(&leds[..3]);
+        let agreeing = IdentifyPrior {
+            previous: [Some(leds[0]), Some(leds[1]), Some(leds[2]), None],
+            ..Default::default()
+        };
+        let r = id.identify(&c, &agreeing).expect("labelled");
+        assert_eq!(r.assignment, [Some(0), Some(1), Some(2), None]);
+        let shifted = IdentifyPrior {
+            previous: [None, Some(leds[0]), Some(leds[1]), Some(leds[2])],
+            ..Default::default()
+        };
+        assert_eq!(id.identify(&c, &shifted), Err(IdentifyError::Ambiguous));
     }
 
     #[test]
