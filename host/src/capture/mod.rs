@@ -1,5 +1,5 @@
 //! Frame capture for live tracking: a [`FrameSource`] hands out 8-bit grey frames stamped with the host time
-//! taken at capture. Cameras come through nokhwa behind the `camera` feature ([`camera`]); [`RecordedFrames`]
+//! taken at capture. Cameras come through nokhwa behind the `camera` feature (module `camera`); [`RecordedFrames`]
 //! plays a recording's images back at their nominal rate (tests and dry runs without hardware).
 
 #[cfg(feature = "camera")]

@@ -1,4 +1,6 @@
-//! Online hard-iron calibration of the magnetometer: a sphere fit to the raw readings.
+//! Online hard-iron calibration of the magnetometer: a sphere fit to the raw readings
+//! (anchors-tracking.md: psmoveapi's "Possible Yaw Drift", #442, was fixed by magnetometer
+//! calibration; there the user runs `psmove calibrate`, here the session's own motion is used).
 //!
 //! The pen's board (battery, Bluetooth module, traces) adds a constant field `h` to the Earth's
 //! field, so the readings `m_i` lie on a sphere `|m_i - h| = B` around `h` instead of the origin;

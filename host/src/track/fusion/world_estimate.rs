@@ -1,7 +1,6 @@
 //! Online estimate of the world reference (gravity "up" and the magnetic field in the left-camera
-//! frame) from the session itself, so no rig-to-gravity calibration is needed (digest §2.5: the
-//! filter's camera-to-world alignment "must be calibrated"; anchors-tracking.md §8 lists it as a
-//! calibration pain users of psmoveapi hit).
+//! frame) from the session itself, so no rig-to-gravity calibration is needed (the digest §2.5
+//! leaves this camera-to-world alignment to calibration; see also [`super`]).
 //!
 //! An IMU-only copy of the orientation filter runs in an arbitrary Earth frame `E` (the default
 //! [`WorldReference`]): its gravity and magnetic-heading corrections make `E` a fixed frame, up to
@@ -11,9 +10,10 @@
 //! profile matrix `B = Σ d_i e_iᵀ` (Markley 1988), with outliers (mislabelled frames, hand
 //! accelerations) removed in a few reweighting rounds. The estimate is accepted once the
 //! worst-determined rotation axis, from the information matrix `Σ (I - d_i d_iᵀ) / σ²`, is known
-//! to `target_sigma`: pen axes inside a narrow cone leave the rotation about the cone's axis
-//! poorly determined, and the estimate waits for more spread. Then `up_C = R up_E`,
-//! `m_C = R m_E`.
+//! to `target_sigma` *and* the pen axes spread about that rotation axis by `min_spread`: pen axes
+//! inside a narrow cone leave the rotation about the cone's axis poorly determined, and the
+//! magnetometer's orientation-dependent errors, which are not white, would be amplified into it.
+//! Then `up_C = R up_E`, `m_C = R m_E`.
 
 use super::imu::{ImuSample, WorldReference};
 use super::orientation::{OrientationConfig, OrientationFilter};
