@@ -37,6 +37,8 @@ enum Command {
     Track(cli::track::TrackArgs),
     /// Calibrate the stereo rig from chessboard image pairs (needs the `opencv` feature).
     Calibrate(cli::calibrate::CalibrateArgs),
+    /// Fit the pen-tip offset from a recording of the pivot gesture (tip held still, pen turned).
+    Pivot(cli::pivot::PivotArgs),
 }
 
 fn main() -> ExitCode {
@@ -49,6 +51,7 @@ fn main() -> ExitCode {
         Command::Sim(args) => cli::sim::run(args),
         Command::Calibrate(args) => cli::calibrate::run(args),
         Command::Track(args) => cli::track::run(args),
+        Command::Pivot(args) => cli::pivot::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

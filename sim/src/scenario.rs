@@ -23,6 +23,7 @@ pub const SCENARIOS: &[(&str, &str)] = &[
     ("bar", "thesis 7.1 experiment 1: an 81.0 mm bar with an LED at each end moved through 0.35-1.5 m in front of the fires-v1 rig"),
     ("tip", "thesis 7.1 experiment 2: the pen with its tip at LED 1, which is never rendered; 0.35-1.5 m in front of the fires-v1 rig"),
     ("stress", "fires-v2 rig with a box: hand occlusion, reflections, sunlight, link faults with a disconnect, fast motion"),
+    ("pivot", "tip pivot calibration on the fires-v1 rig: the tip held on one point 0.7 m away while the pen sweeps a 35 deg cone and rolls"),
 ];
 
 /// Rig pitch below the horizontal, radians.
@@ -44,6 +45,13 @@ pub enum MotionSpec {
     },
     /// Free motion through waypoints (no object).
     Free(FreeMotion),
+    /// The tip held still on a point while the pen turns about it (pivot calibration).
+    Pivot {
+        /// The pivot point, world, metres.
+        tip: V3,
+        /// Largest angle of the pen's back from the direction to the cameras, radians.
+        cone: f64,
+    },
 }
 
 /// A fully specified simulation setup.
@@ -368,6 +376,16 @@ pub fn scenario(
                 link,
             )
         }
+        "pivot" => base(
+            wii_rig(0.0001),
+            Pen::fires_default(),
+            None,
+            MotionSpec::Pivot {
+                tip: V3::new(0.10, 0.05, 0.70),
+                cone: 35f64.to_radians(),
+            },
+            LinkConfig::clean(),
+        ),
         other => return Err(SimError::UnknownScenario(other.to_string())),
     };
     Ok(sc)

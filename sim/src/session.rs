@@ -141,6 +141,24 @@ pub fn build_trajectory(sc: &Scenario, seed: u64, duration_s: f64) -> Trajectory
             let scene = Arc::new(Scene::new(shape, view, up, eye, style.extent * size));
             Trajectory::drawing(scene, duration_s, *style, &mut rng)
         }
+        MotionSpec::Pivot { tip, cone } => {
+            // Rest-to-rest turns about the tip to random directions in the cone, each with a roll.
+            let back0 = (eye - tip).normalize();
+            let start = Pose {
+                tip: *tip,
+                q: orientation_from_axis(&(-back0), 0.0),
+            };
+            let mut legs = Vec::new();
+            let mut t = 0.5;
+            while t < duration_s {
+                let back = random_direction_near(&back0, *cone, &mut rng);
+                let q = orientation_from_axis(&(-back), rng.range(-3.2, 3.2));
+                let dt = rng.range(0.6, 1.2);
+                legs.push((dt, Pose { tip: *tip, q }));
+                t += dt;
+            }
+            Trajectory::waypoints(start, 0.5, &legs)
+        }
         MotionSpec::Free(free) => {
             let free = *free;
             Trajectory::free(duration_s, free, &mut rng, |rng, depth| {

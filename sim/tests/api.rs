@@ -58,7 +58,7 @@ fn every_scenario_runs_and_says_what_its_cameras_provide() {
                     }
                 }
             }
-            let wii = name.starts_with("fires-v1") || *name == "bar" || *name == "tip";
+            let wii = name.starts_with("fires-v1") || ["bar", "tip", "pivot"].contains(name);
             assert_eq!(
                 r.meta().cameras[0].provides,
                 if images && !wii {

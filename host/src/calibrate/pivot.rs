@@ -175,10 +175,70 @@ fn stats_mm(res: &[f64]) -> (f64, f64) {
     (rms * 1e3, res.iter().fold(0.0f64, |m, r| m.max(*r)) * 1e3)
 }
 
+/// The `(LED 1 on the axis, unit axis)` pose of every vision sample of a tracked pivot gesture:
+/// each labelled LED `k` gives LED 1 at `p_k + l_k v` (LED `k` sits `l_k` behind LED 1 along the
+/// axis `v`, which points towards the tip), averaged over the labelled LEDs.
+pub fn axis_poses(
+    samples: &[crate::track::TrackSample],
+    pen: &crate::track::PenGeometry,
+) -> Vec<(Vector3<f64>, Vector3<f64>)> {
+    samples
+        .iter()
+        .filter(|s| matches!(s.quality, crate::track::TrackQuality::Vision { .. }))
+        .filter_map(|s| {
+            let v = Vector3::from(s.direction?).try_normalize(1e-12)?;
+            let led1: Vec<Vector3<f64>> = s
+                .leds
+                .iter()
+                .zip(&pen.led_offsets)
+                .filter_map(|(p, l)| p.map(|p| Vector3::from(p) + v * *l))
+                .collect();
+            (led1.len() >= 2).then(|| {
+                let mean = led1.iter().sum::<Vector3<f64>>() / led1.len() as f64;
+                (mean, v)
+            })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::track::synth::SplitMix64;
+
+    #[test]
+    fn axis_poses_put_led_1_on_the_axis_from_any_labelled_leds() {
+        use crate::track::{PenGeometry, TrackQuality, TrackSample};
+        let pen = PenGeometry::thesis();
+        let v = Vector3::new(0.2, -0.3, 0.9).normalize();
+        let led1 = Vector3::new(0.1, 0.05, 0.7);
+        let at = |k: usize| Some((led1 - v * pen.led_offsets[k]).into());
+        let sample = |leds: [Option<[f64; 3]>; 4], quality| TrackSample {
+            t_ns: 0,
+            tip: None,
+            raw_tip: None,
+            direction: Some(v.into()),
+            leds,
+            labels: [None; 4],
+            quality,
+            confidence: 1.0,
+            interference: 0,
+        };
+        let samples = [
+            sample([None, at(1), None, at(3)], TrackQuality::Vision { leds: 2 }),
+            sample(
+                [at(0), at(1), at(2), at(3)],
+                TrackQuality::Vision { leds: 4 },
+            ),
+            sample([None, None, at(2), None], TrackQuality::Vision { leds: 1 }),
+            sample([at(0), at(1), None, None], TrackQuality::DeadReckoned),
+        ];
+        let p = axis_poses(&samples, &pen);
+        assert_eq!(p.len(), 2, "one-LED and non-vision samples are skipped");
+        for (q, axis) in p {
+            assert!((q - led1).norm() < 1e-12 && (axis - v).norm() < 1e-12);
+        }
+    }
 
     fn poses(
         rng: &mut SplitMix64,
