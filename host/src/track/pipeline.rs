@@ -547,26 +547,41 @@ impl Tracker {
             right,
         );
         let stale = direction_sigma.is_some_and(|s| s > self.config.identify.prior_sigma);
-        match self
+        let id = match self
             .identifier
             .identify_with_images(cands, &prior, left, right)
         {
-            // Two LEDs are one distance: with only a stale direction to check it, a wrong stereo
-            // pair at that distance (LED images a few pixels apart) would pass.
-            Ok(id) if stale && id.count() < 3 => self.no_vision_sample(t, IdentifyError::Ambiguous),
-            // ...and a pair shifted by one LED in one image (LED images a few pixels apart when
-            // the pen points at a camera or turns fast) also fits: two LEDs need the fused
-            // direction and temporal continuity (§4.1.2), i.e. must sit where the pen's recent
-            // motion predicts them.
-            Ok(id) if id.count() < 3 && !self.labels_match_prediction(this, t, &id) => {
-                self.no_vision_sample(t, IdentifyError::Ambiguous)
-            }
-            Ok(id) if !(self.pen_images_separated(&id) && self.labelled_blobs_isolated(&id)) => {
-                self.no_vision_sample(t, IdentifyError::Ambiguous)
-            }
-            Ok(id) => self.vision_sample(this, t, &id),
-            Err(e) => self.no_vision_sample(t, e),
+            Ok(id) => id,
+            Err(e) => return self.no_vision_sample(t, e),
+        };
+        let Ok(vision) = self.tip.estimate(&id.points) else {
+            return self.no_vision_sample(t, IdentifyError::NoConsistentSet);
+        };
+        if !self.labelling_is_safe(this, t, &id, &vision, stale) {
+            return self.no_vision_sample(t, IdentifyError::Ambiguous);
         }
+        self.vision_sample(this, t, &id, vision)
+    }
+
+    /// The tracker's checks of an identification beyond the identifier's own, from what only
+    /// the tracker knows (the prior's age, the pen's recent motion, the images).
+    fn labelling_is_safe(
+        &self,
+        this: usize,
+        t: u64,
+        id: &super::identify::Identification,
+        vision: &super::tip::TipEstimate,
+        stale_prior: bool,
+    ) -> bool {
+        // Two LEDs are one distance: with only a stale direction to check it, a wrong stereo
+        // pair at that distance would pass; and a pair shifted by one LED in one image (LED
+        // images a few pixels apart when the pen points at a camera or turns fast) also fits.
+        // So two LEDs need the fused direction and temporal continuity (§4.1.2), i.e. must sit
+        // where the pen's recent motion predicts them.
+        if id.count() < 3 && (stale_prior || !self.labels_match_prediction(this, t, id)) {
+            return false;
+        }
+        self.pen_images_separated(vision) && self.labelled_blobs_isolated(id)
     }
 
     /// Undistorts the newest frame of `this` and the time-aligned latest frame of the other camera.
@@ -676,10 +691,7 @@ impl Tracker {
 
     /// True when the images of every two of the pen's four LEDs (the labelled pen's model,
     /// unlabelled LEDs included) are at least `min_image_separation_px` apart in both cameras.
-    fn pen_images_separated(&self, id: &super::identify::Identification) -> bool {
-        let Ok(pen) = self.tip.estimate(&id.points) else {
-            return false;
-        };
+    fn pen_images_separated(&self, pen: &super::tip::TipEstimate) -> bool {
         let Some(c) = self.tip.pattern_centroid(pen.pattern) else {
             return false;
         };
@@ -704,16 +716,13 @@ impl Tracker {
 
     /// True when the predicted LED images (constant-velocity pen motion) put every labelled blob
     /// nearest its own LED's predicted image, in both cameras (the other camera's blobs moved to
-    /// `t`); false without a recent pen to predict from.
+    /// `t`); false without a prediction.
     fn labels_match_prediction(
         &self,
         this: usize,
         t: u64,
         id: &super::identify::Identification,
     ) -> bool {
-        let Some(leds) = self.predicted_leds(t) else {
-            return false;
-        };
         let own: &[[f64; 2]] = self.cameras[this]
             .current
             .as_ref()
@@ -725,12 +734,8 @@ impl Tracker {
         };
         let cands = &self.correspondences.candidates;
         for (camera, blobs) in [(CameraId::Left, left_px), (CameraId::Right, right_px)] {
-            let Ok(px) = leds
-                .iter()
-                .map(|p| self.rig.project(camera, p))
-                .collect::<Result<Vec<_>, _>>()
-            else {
-                return true;
+            let Some(px) = self.predicted_images(camera, t) else {
+                return false;
             };
             for (k, c) in id.assignment.iter().enumerate() {
                 let Some(c) = c.and_then(|c| cands.get(c)) else {
@@ -760,14 +765,7 @@ impl Tracker {
             return frame.labels;
         }
         let mut ids = [None; LED_COUNT];
-        let Some(leds) = self.predicted_leds(frame.t_ns) else {
-            return ids;
-        };
-        let Ok(px) = leds
-            .iter()
-            .map(|p| self.rig.project(camera, p))
-            .collect::<Result<Vec<_>, _>>()
-        else {
+        let Some(px) = self.predicted_images(camera, frame.t_ns) else {
             return ids;
         };
         let mut spacing = self.config.max_blob_motion_px;
@@ -788,6 +786,16 @@ impl Tracker {
             }
         }
         ids
+    }
+
+    /// The images of the four LEDs in `camera` at `t` predicted by [`Self::predicted_leds`], or
+    /// None without a prediction or when an LED does not project.
+    fn predicted_images(&self, camera: CameraId, t: u64) -> Option<Vec<[f64; 2]>> {
+        self.predicted_leds(t)?
+            .iter()
+            .map(|p| self.rig.project(camera, p))
+            .collect::<Result<Vec<_>, _>>()
+            .ok()
     }
 
     /// All four LED positions at `t` from the last two vision poses (constant velocity), or None
@@ -943,10 +951,8 @@ impl Tracker {
         this: usize,
         t: u64,
         id: &super::identify::Identification,
+        vision: super::tip::TipEstimate,
     ) -> TrackSample {
-        let Ok(vision) = self.tip.estimate(&id.points) else {
-            return self.no_vision_sample(t, IdentifyError::NoConsistentSet);
-        };
         // Only labels the geometry settled may calibrate the world: a prior from an
         // uncalibrated filter could confirm its own error. Mirrored three-LED labellings that
         // slipped through the distance test are outliers of the fit.
