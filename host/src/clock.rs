@@ -1,4 +1,4 @@
-//! Host time: monotonic nanoseconds since the session started (architecture.md §2). Every measurement the host
+//! Host time: monotonic nanoseconds since the session started (docs/architecture.md §2). Every measurement the host
 //! takes is stamped with it as close to the source as possible.
 
 use std::time::Instant;

@@ -1,6 +1,6 @@
 //! Checksums of the wire format.
 //!
-//! Packets (pen -> host) use the thesis's XOR checksum (seed 002, App. B; digest §1.1): byte 21 is the XOR of
+//! Packets (pen -> host) use the thesis's XOR checksum (FIRES thesis, App. B): byte 21 is the XOR of
 //! bytes 0..=20. XOR detects every single-byte error, which is the fault the radio produces most.
 //! Extended commands (host -> pen) carry a CRC-8 (polynomial 0x07, init 0x00, "CRC-8/SMBUS"), which detects every
 //! burst of up to 8 bits, so every corrupted character of a hex-encoded command frame.

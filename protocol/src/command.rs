@@ -1,6 +1,6 @@
 //! Host -> pen commands.
 //!
-//! The thesis defines two single-byte commands (seed 002, App. B; digest §1.1): `=` (0x3D) starts streaming,
+//! The thesis defines two single-byte commands (FIRES thesis, App. B): `=` (0x3D) starts streaming,
 //! `:` (0x3A) stops it. They stay exactly so. Every further command is an **extended frame** of printable ASCII:
 //!
 //! ```text

@@ -1,4 +1,4 @@
-//! Byte-at-a-time stream decoder for the pen -> host link (architecture.md §3).
+//! Byte-at-a-time stream decoder for the pen -> host link (hardware-docs/protocol.md).
 //!
 //! The link is a serial byte stream with no framing beyond the packets' own sync pairs, so the decoder must find
 //! frame boundaries, survive garbage, lost and corrupted bytes, and never report a frame the pen did not send.

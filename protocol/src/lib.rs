@@ -1,7 +1,7 @@
-//! FIRES smart-pen wire format, shared by the pen firmware and the host (architecture.md §3,
+//! FIRES smart-pen wire format, shared by the pen firmware and the host (hardware-docs/protocol.md,
 //! hardware-docs/protocol.md).
 //!
-//! - [`SensorPacket`]: the thesis's 22-byte IMU packet (seed 002, App. B; digest §1.1), little-endian.
+//! - [`SensorPacket`]: the thesis's 22-byte IMU packet (FIRES thesis, App. B), little-endian.
 //! - [`StatusPacket`]: buttons, device time, battery, health and versions in a 22-byte frame with its own sync.
 //! - [`Command`] / [`CommandParser`]: host -> pen commands, `=` and `:` as the thesis plus CRC-framed extensions.
 //! - [`StreamDecoder`]: byte-at-a-time resynchronising decoder of the pen -> host stream.

@@ -1,5 +1,5 @@
 //! Physical scale factors of the pen's sensors: part of the board description, never of the packet
-//! (architecture.md §3). The host reads them from a recording's metadata; these are the defaults for the FIRES
+//! (hardware-docs/protocol.md). The host reads them from a recording's metadata; these are the defaults for the FIRES
 //! board (hardware-docs/board.md) at the ranges the firmware configures.
 
 /// Multipliers from raw packet counts to SI units.

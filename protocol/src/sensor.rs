@@ -1,4 +1,4 @@
-//! The 22-byte sensor packet of the FIRES smart-pen (seed 002, App. B; digest §1.1; architecture.md §3).
+//! The 22-byte sensor packet of the FIRES smart-pen (FIRES thesis, App. B; hardware-docs/protocol.md).
 //!
 //! | bytes  | field                                   |
 //! |--------|-----------------------------------------|
@@ -9,7 +9,7 @@
 //! | 15..=20| magnetometer x, y, z (i16 LE)           |
 //! | 21     | XOR of bytes 0..=20                     |
 //!
-//! The thesis leaves the byte order open; FIRES fixes little-endian (architecture.md §3). Values are raw sensor
+//! The thesis leaves the byte order open; FIRES fixes little-endian (hardware-docs/protocol.md). Values are raw sensor
 //! counts: the physical scale belongs to the board description ([`crate::ScaleFactors`]), not to the packet.
 
 use crate::checksum::xor;

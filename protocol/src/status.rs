@@ -1,5 +1,5 @@
 //! The 22-byte status packet: everything the thesis packet lacks (buttons, device time, battery, health,
-//! versions), in a frame of the same size with its own sync pair `0x20 0x0B` (architecture.md §3), so a decoder
+//! versions), in a frame of the same size with its own sync pair `0x20 0x0B` (hardware-docs/protocol.md), so a decoder
 //! that only knows sensor packets skips it as garbage and a new one reads it.
 //!
 //! | bytes   | field                                                                         |

@@ -1,6 +1,6 @@
 //! # fires-recon: the FIRES geometry core
 //!
-//! Everything reconstruction and editing stand on (architecture.md §5):
+//! Everything reconstruction and editing stand on (docs/architecture.md §8):
 //! * [`mesh`]: an index-based halfedge [`mesh::SurfaceMesh`] with properties, circulators,
 //!   Euler operations, garbage collection and `validate()`;
 //! * [`io`]: OBJ, OFF, PLY and STL readers/writers and Matrix Market;

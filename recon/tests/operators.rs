@@ -236,7 +236,7 @@ fn obtuse_and_degenerate_triangles_give_finite_operators() {
 
 #[test]
 fn hat_gradients_match_the_metric_tensor_form() {
-    // ω^{j1} = g¹¹e1 + g¹²e2, ω^{j2} = g²¹e1 + g²²e2 (seed-002-part1 §1.2, eq. 1.7).
+    // ω^{j1} = g¹¹e1 + g¹²e2, ω^{j2} = g²¹e1 + g²²e2 (FIRES thesis, Part I §1.2, eq. 1.7).
     let pts = [
         Vec3::new(0.1, -0.2, 0.3),
         Vec3::new(1.3, 0.1, -0.2),

@@ -1,6 +1,6 @@
 //! The pen: LED geometry along the axis, tip offset, and the LEDs' emission cone.
 //!
-//! Pen frame (architecture.md §2): origin at the tip, +x along the axis from the back towards the tip. LED `i` is at
+//! Pen frame (docs/architecture.md §2): origin at the tip, +x along the axis from the back towards the tip. LED `i` is at
 //! `x = -(tip_offset + l_i)`. The LEDs face backwards (along -x, away from the tip, towards a user-facing camera
 //! rig); brightness falls off as `cos(theta)^exponent` with the angle `theta` between -x and the direction to the
 //! camera and is zero beyond `cutoff_deg`.

@@ -1,6 +1,6 @@
 //! The board description the host needs: scale factors and rates (hardware-docs/board.md).
 //!
-//! Scale factors live here and in the recording metadata, never in the packets (architecture.md §3).
+//! Scale factors live here and in the recording metadata, never in the packets (hardware-docs/protocol.md).
 
 use fires_protocol::ScaleFactors;
 

@@ -1,4 +1,4 @@
-//! Stereo rig calibration from chessboard views with OpenCV (Zhang's method; thesis ref. [113], digest §1.2):
+//! Stereo rig calibration from chessboard views with OpenCV (Zhang's method; thesis ref. [113]):
 //! corners per view (`findChessboardCorners` + `cornerSubPix`), each camera's intrinsics and distortion
 //! (`calibrateCamera`), then the right camera's pose in the left camera's frame (`stereoCalibrate` with the
 //! intrinsics fixed). RMS reprojection errors are reported in pixels. The thesis redoes this before every session.

@@ -1,5 +1,5 @@
-//! Calibration: the stereo rig from chessboard views (Zhang's method through OpenCV, as the thesis, seed 002
-//! digest §1.2; feature `opencv`) and the pen tip by pivoting (no OpenCV needed).
+//! Calibration: the stereo rig from chessboard views (Zhang's method through OpenCV, as the FIRES thesis,
+//! §4.1; feature `opencv`) and the pen tip by pivoting (no OpenCV needed).
 
 #[cfg(feature = "opencv")]
 pub mod chessboard;

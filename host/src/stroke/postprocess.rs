@@ -1,4 +1,4 @@
-//! End-of-stroke post-processing (thesis §4.1.3, digest §2.4 "Post-processing"):
+//! End-of-stroke post-processing (thesis §4.1.3):
 //!
 //! 1. [`sample_by_distance`]: keep a point when it is at least `threshold` from the last kept one
 //!    (the first and last raw points are always kept);
@@ -8,8 +8,8 @@
 //!    well-posed;
 //! 3. [`BSpline::resample`]: points at equal arc-length spacing, ends included exactly.
 //!
-//! Degree, knots, weights and constraints are not in the thesis (digest tag \[I\]); these are the digest's
-//! "natural" choices. The constrained solve eliminates the two fixed control points (the clamped
+//! Degree, knots, weights and constraints are not in the thesis; these are the
+//! natural choices for a clamped cubic B-spline. The constrained solve eliminates the two fixed control points (the clamped
 //! spline passes through its first and last control points), which is exactly the KKT solution.
 
 use nalgebra::{DMatrix, Vector3};

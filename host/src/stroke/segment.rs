@@ -1,4 +1,4 @@
-//! Stroke segmentation by the pen button (digest §8.11, decided here): a stroke starts when the
+//! Stroke segmentation by the pen button (left open by the FIRES thesis; decided here): a stroke starts when the
 //! drawing button is pressed and ends when it is released, both with the status packet's
 //! timestamp; tip samples inside `[press, release]` belong to the stroke. Samples without a tip
 //! (lost tracking) are skipped. A stroke with fewer than `min_points` points is discarded.

@@ -1,6 +1,6 @@
-//! Real-time Gaussian smoothing of the tip trajectory (thesis §4.1.3, digest §2.4): a Gaussian
+//! Real-time Gaussian smoothing of the tip trajectory (thesis §4.1.3): a Gaussian
 //! kernel discretised on `taps` points (300 by default) applied `passes` times (3 by default).
-//! The thesis does not give σ, causality or end handling (digest tag \[I\]); the defaults follow the digest:
+//! The thesis does not give σ, causality or end handling; our defaults:
 //! σ = 50 samples, truncated kernels renormalised at the ends.
 //!
 //! - [`smooth_centred`]: the symmetric (non-causal) filter for a finished stroke or replay.

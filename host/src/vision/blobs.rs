@@ -1,5 +1,5 @@
 //! Blob detection for the IR LEDs on 8-bit frames (issue 5 item 1; the thesis used OpenCV +
-//! cvBlob, digest §1.2).
+//! cvBlob).
 //!
 //! One pass over the search region extracts runs of pixels above `threshold` (32-byte chunks
 //! that contain no bright pixel are skipped with a vectorisable max), runs touching runs of the

@@ -3,7 +3,7 @@
 //! Every generator returns a valid [`SurfaceMesh`] together with nothing else; the
 //! analytic quantities to test against (area, volume, normals, curvatures) are the free
 //! functions in each shape's module. Curvature convention: `mean` is the *average*
-//! (κ1 + κ2)/2, see seed-002-part1 §0.
+//! (κ1 + κ2)/2, see FIRES thesis, Part I §0.
 
 mod cube;
 mod cylinder;

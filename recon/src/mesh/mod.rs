@@ -1,4 +1,4 @@
-//! Index-based halfedge surface mesh (architecture.md §5; model: pmp-library's
+//! Index-based halfedge surface mesh (docs/architecture.md §8; model: pmp-library's
 //! `SurfaceMesh`, geometry-central's attribute arrays).
 //!
 //! * [`SurfaceMesh`] stores connectivity in flat arrays addressed by typed handles

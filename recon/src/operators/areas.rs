@@ -28,7 +28,7 @@ pub fn total_area(mesh: &SurfaceMesh) -> f64 {
 }
 
 /// Signed enclosed volume `(1/6) Σ p₀ · (pₖ × pₖ₊₁)` over a fan triangulation of each face
-/// (seed-002-part1 §1.6, with the unnormalised normal). Exact for closed, consistently
+/// (FIRES thesis, Part I §1.6, with the unnormalised normal). Exact for closed, consistently
 /// oriented meshes; positive for outward orientation.
 pub fn volume(mesh: &SurfaceMesh) -> f64 {
     let mut v = 0.0;

@@ -1,5 +1,5 @@
 //! The cotangent matrix `C_ij = ½(cot α_ij + cot β_ij)`, `C_ii = −Σ_j C_ij`
-//! (seed-002-part1 §1.4 Meyer row; symmetric, negative semidefinite).
+//! (FIRES thesis, Part I §1.4 Meyer row; symmetric, negative semidefinite).
 
 use super::{triangles, OperatorError};
 use crate::geometry::cot_of_angle_between;

@@ -1,4 +1,4 @@
-//! Curvatures (seed-002-part1 §1.5): mean curvature normal `H⃗ = −ΔX` (cotangent
+//! Curvatures (FIRES thesis, Part I §1.5): mean curvature normal `H⃗ = −ΔX` (cotangent
 //! Laplacian, mixed Voronoi areas), signed mean curvature, angle-defect Gaussian curvature
 //! and principal curvatures `κ = H ± √(max(H² − K, 0))` (the square root's argument is
 //! clamped at 0, Meyer et al.).
@@ -18,7 +18,7 @@ use crate::solve::sparse_triplets;
 
 const MIN_AREA: f64 = 1e-300;
 
-/// `H⃗_i = −(1/A_i) Σ_j C_ij (X_j − X_i)`, with length 2|H| (seed-002-part1 §1.5).
+/// `H⃗_i = −(1/A_i) Σ_j C_ij (X_j − X_i)`, with length 2|H| (FIRES thesis, Part I §1.5).
 pub fn mean_curvature_normals(mesh: &SurfaceMesh) -> Result<Vec<Vec3>, OperatorError> {
     let c = cotan_matrix(mesh)?;
     let area = vertex_areas(mesh, MassKind::MixedVoronoi)?;

@@ -1,4 +1,4 @@
-//! Per-face gradient and per-vertex (integrated) divergence (seed-002-part1 §1.2–1.3).
+//! Per-face gradient and per-vertex (integrated) divergence (FIRES thesis, Part I §1.2–1.3).
 //!
 //! On a triangle `T = (i, j, k)` the gradient of the hat function of `i` is
 //! `ω^i_T = N_T × (X_k − X_j) / (2|T|)` (§1.2 cross-check form), so
@@ -70,7 +70,7 @@ pub fn divergence_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorErr
     )?)
 }
 
-/// The thesis's per-vertex gradient `W = D_W·W^s` (seed-002-part1 §1.2, eqs. 1.5, 1.9–1.10,
+/// The thesis's per-vertex gradient `W = D_W·W^s` (FIRES thesis, Part I §1.2, eqs. 1.5, 1.9–1.10,
 /// with the corrected (**FIX**) diagonal sign): the area-weighted average of the face gradients
 /// around each vertex, as a `3V × V` matrix (row `3i + c`). Its transpose-free use
 /// `div V ≈ Σ_c W_c V_c` (§1.3) and the 2-ring Laplacian `W·W` follow from it.

@@ -1,4 +1,4 @@
-//! The Laplacian discretisations tabulated in seed-002-part1 §1.4, as `L = D·L̄` with
+//! The Laplacian discretisations tabulated in FIRES thesis, Part I §1.4, as `L = D·L̄` with
 //! `L̄_ij = w_ij` off the diagonal and `L̄_ii = −Σ_j w_ij` (negative semidefinite sign):
 //!
 //! | kind | w_ij | D_ii |

@@ -1,4 +1,4 @@
-//! Vertex areas and the lumped mass matrix (seed-002-part1 §1.1: barycentric cells and
+//! Vertex areas and the lumped mass matrix (FIRES thesis, Part I §1.1: barycentric cells and
 //! Meyer et al.'s mixed Voronoi cells).
 
 use super::{triangles, OperatorError};
@@ -12,7 +12,7 @@ pub enum MassKind {
     /// A third of the area of every incident triangle.
     Barycentric,
     /// Voronoi cells, with Meyer's fix for obtuse triangles (half the area to the obtuse
-    /// corner, a quarter to the others). Default, as seed-002-part1 §1.1 decides.
+    /// corner, a quarter to the others). Default, as FIRES thesis, Part I §1.1 decides.
     #[default]
     MixedVoronoi,
 }

@@ -1,15 +1,15 @@
-//! Discrete differential operators on triangle meshes (seed-002-part1 §1.1–1.6,
-//! seed-000 §1; conventions of seed-002-part1 §0).
+//! Discrete differential operators on triangle meshes (FIRES thesis, Part I §1.1–1.6,
+//! Differential Methods for Intuitive 3D Shape Modeling, ch. 1; conventions of FIRES thesis, Part I §0).
 //!
 //! Conventions:
 //! * Matrices are indexed by vertex/face *index*; call
 //!   [`crate::mesh::SurfaceMesh::garbage_collection`] first so indices are dense.
 //! * [`cotan_matrix`] is the symmetric, negative semidefinite `C` with
 //!   `C_ij = ½(cot α_ij + cot β_ij)` (libigl's `cotmatrix`, the FEM stiffness with a minus
-//!   sign). The thesis table's `L̄` (seed-002-part1 §1.4) is `2C`; with its `D = 1/(2A_i)`
+//!   sign). The thesis table's `L̄` (FIRES thesis, Part I §1.4) is `2C`; with its `D = 1/(2A_i)`
 //!   both give the same `L = M⁻¹ C`.
 //! * Mean curvature `H` is the average (κ1 + κ2)/2; the mean curvature *normal*
-//!   `H⃗ = −Δ X = 2 H N` (so ‖H⃗‖ = 2/r on a sphere), seed-002-part1 §0, §1.5.
+//!   `H⃗ = −Δ X = 2 H N` (so ‖H⃗‖ = 2/r on a sphere), FIRES thesis, Part I §0, §1.5.
 //!
 //! Robustness (what is clamped): a cotangent uses `cos/max(sin, 1e-8·|u||v|)`, so a
 //! degenerate corner gives a weight of at most ~1e8 instead of ∞/NaN

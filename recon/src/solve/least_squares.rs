@@ -1,6 +1,6 @@
 //! Stacked soft constraints: minimise `Σₖ wₖ ‖Aₖ x − bₖ‖²` through the normal equations
 //! `(Σ wₖ AₖᵀAₖ) x = Σ wₖ Aₖᵀ bₖ`, factorised once (the Laplacian-editing pattern of
-//! seed-000 §1: Laplacian rows plus weighted positional rows).
+//! Differential Methods for Intuitive 3D Shape Modeling, ch. 1: Laplacian rows plus weighted positional rows).
 
 use faer::sparse::SparseColMatRef;
 use faer::{Mat, MatRef};

@@ -1,4 +1,4 @@
-//! Sparse solvers (seed-002-part1 §1.9; anchors-geometry §5–6; architecture.md §5).
+//! Sparse solvers (FIRES thesis, Part I §1.9; docs/architecture.md §8).
 //!
 //! libigl's precompute/solve split on top of faer's sparse Cholesky:
 //! * [`CholeskySolver`]: symbolic analysis (AMD ordering, elimination tree, supernodes)

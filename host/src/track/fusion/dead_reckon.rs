@@ -1,5 +1,5 @@
-//! Tip dead reckoning through short occlusions (digest §2, step 8: "integrate the pen acceleration
-//! from the last vision-based position", which the thesis suggests but does not implement).
+//! Tip dead reckoning through short occlusions (integrating the pen acceleration
+//! from the last vision-based position, which the FIRES thesis, §4.1.4, suggests but does not implement).
 //!
 //! While the tip is seen, an alpha-beta filter keeps its velocity. When it is lost, the tip is
 //! extrapolated with that velocity, decaying exponentially, plus (optionally) the world-frame

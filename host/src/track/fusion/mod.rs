@@ -1,4 +1,4 @@
-//! Vision-inertial fusion of the pen direction (thesis §4.1.4, digest §2.5) and tip dead reckoning.
+//! Vision-inertial fusion of the pen direction (thesis §4.1.4) and tip dead reckoning.
 //!
 //! - [`thesis_kalman`]: the thesis's 4-state Kalman filter exactly as eqs. 4.18-4.21 (selectable).
 //! - [`orientation`]: the default, a Mahony-style complementary filter on SO(3) with gyro-bias
@@ -10,7 +10,8 @@
 //! Frames: world = left camera frame; the pen (body) frame has +x along the axis towards the tip
 //! and is assumed to coincide with the IMU axes (a fixed mounting rotation can be applied with
 //! [`imu::ImuScale::pen_from_sensor`]). The world "up" and magnetic-field directions are inputs
-//! ([`imu::WorldReference`]); the digest notes this camera-to-world alignment must be calibrated.
+//! ([`imu::WorldReference`]); the thesis leaves this camera-to-world alignment to calibration;
+//! [`world_estimate`] estimates it from the session.
 
 pub mod dead_reckon;
 pub mod imu;

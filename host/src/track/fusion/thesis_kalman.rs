@@ -1,5 +1,5 @@
-//! The thesis's Kalman fusion model, exactly as eqs. 4.18-4.21 (digest §2.5, with the digest's
-//! correction that eq. 4.21 measures the state at time t).
+//! The thesis's Kalman fusion model, exactly as eqs. 4.18-4.21 (FIRES thesis, §4.1.4,
+//! corrected so that eq. 4.21 measures the state at time t, as its text says).
 //!
 //! State `x = [α_θ, α_γ, ω_θ, ω_γ]` (eq. 4.20): two pen-direction angles and their rates, with
 //! `A = [[1,0,dt,0],[0,1,0,dt],[0,0,1,0],[0,0,0,1]]` (constant angular rate, eq. 4.18) and
@@ -8,7 +8,7 @@
 //! The standard predict/update equations are used; the vision rows and the inertial rows can be
 //! applied separately (partial H) because the camera and the IMU are asynchronous.
 //!
-//! Decisions the thesis leaves open (digest tag \[I\]), as recommended by the digest: the angles are elevation
+//! Decisions the thesis leaves open, and ours: the angles are elevation
 //! `θ = asin(v·up)` and azimuth `γ` about "up" from magnetic north (azimuth innovations wrap);
 //! the inertial direction comes from accelerometer + magnetometer (TRIAD); the gyroscope is not a
 //! measurement (as in the thesis, ω is inferred through the dynamics only); `Q = diag(q_α dt,

@@ -1,6 +1,6 @@
 //! Tip position filter: a constant-velocity Kalman filter on the eq. 4.13 tip, driven by the IMU's
-//! world-frame linear acceleration `q a - g up` between camera frames (digest §2 step 8 uses the
-//! same acceleration to dead-reckon; here it also sharpens the prediction while the pen is seen).
+//! world-frame linear acceleration `q a - g up` between camera frames (the FIRES thesis, §4.1.4,
+//! suggests the same acceleration to dead-reckon; here it also sharpens the prediction while the pen is seen).
 //!
 //! The three axes share one 2x2 covariance (isotropic noise). Between two vision tips the filter
 //! integrates the buffered acceleration samples (the IMU runs ahead of the cameras); unmodelled

@@ -1,5 +1,5 @@
 //! Online estimate of the world reference (gravity "up" and the magnetic field in the left-camera
-//! frame) from the session itself, so no rig-to-gravity calibration is needed (the digest §2.5
+//! frame) from the session itself, so no rig-to-gravity calibration is needed (the FIRES thesis, §4.1.4,
 //! leaves this camera-to-world alignment to calibration; see also [`super`]).
 //!
 //! An IMU-only copy of the orientation filter runs in an arbitrary Earth frame `E` (the default
