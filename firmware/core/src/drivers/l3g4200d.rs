@@ -15,7 +15,7 @@
 use embedded_hal_async::delay::DelayNs;
 
 use super::bus::RegisterBus;
-use super::{axes_le, axes_sub, Axes, SensorError};
+use super::{axes_le, Axes, SensorError};
 
 /// 7-bit I2C address with SDO high (the FIRES board).
 pub const I2C_ADDRESS: u8 = 0x69;
@@ -104,30 +104,17 @@ impl<B: RegisterBus> L3g4200d<B> {
         delay: &mut D,
     ) -> Result<Axes, SensorError<B::Error>> {
         self.configure().await?;
-        delay.delay_ms(SETTLE_MS).await;
-        let base = self.mean(delay).await?;
-        self.bus
-            .write_register(reg::CTRL_REG4, CTRL_REG4_SELF_TEST)
-            .await?;
-        delay.delay_ms(SETTLE_MS).await;
-        let excited = self.mean(delay).await?;
-        self.bus
-            .write_register(reg::CTRL_REG4, CTRL_REG4_RUN)
-            .await?;
-        delay.delay_ms(SETTLE_MS).await;
-        let response = axes_sub(excited, base);
-        let ok = response
-            .iter()
-            .all(|d| (SELF_TEST_MIN_COUNTS..=SELF_TEST_MAX_COUNTS).contains(&d.saturating_abs()));
-        if ok {
-            Ok(response)
-        } else {
-            Err(SensorError::SelfTestFailed { response })
+        super::SelfTest {
+            register: reg::CTRL_REG4,
+            excited: CTRL_REG4_SELF_TEST,
+            running: CTRL_REG4_RUN,
+            output: reg::OUT_X_L,
+            settle_ms: SETTLE_MS,
+            min: SELF_TEST_MIN_COUNTS,
+            max: SELF_TEST_MAX_COUNTS,
         }
-    }
-
-    async fn mean<D: DelayNs>(&mut self, delay: &mut D) -> Result<Axes, SensorError<B::Error>> {
-        super::mean_le_axes(&mut self.bus, reg::OUT_X_L, delay).await
+        .run(&mut self.bus, delay)
+        .await
     }
 }
 

@@ -14,7 +14,7 @@
 use embedded_hal_async::delay::DelayNs;
 
 use super::bus::RegisterBus;
-use super::{axes_le, axes_sub, Axes, SensorError};
+use super::{axes_le, Axes, SensorError};
 
 /// 7-bit I2C address.
 pub const I2C_ADDRESS: u8 = 0x1D;
@@ -105,31 +105,17 @@ impl<B: RegisterBus> Lis3lv02dl<B> {
         delay: &mut D,
     ) -> Result<Axes, SensorError<B::Error>> {
         self.configure().await?;
-        delay.delay_ms(SETTLE_MS).await;
-        let base = self.mean(delay).await?;
-        self.bus
-            .write_register(reg::CTRL_REG1, CTRL_REG1_SELF_TEST)
-            .await?;
-        delay.delay_ms(SETTLE_MS).await;
-        let excited = self.mean(delay).await?;
-        self.bus
-            .write_register(reg::CTRL_REG1, CTRL_REG1_RUN)
-            .await?;
-        delay.delay_ms(SETTLE_MS).await;
-        let response = axes_sub(excited, base);
-        let ok = response.iter().all(|d| {
-            let m = d.saturating_abs();
-            (SELF_TEST_MIN_COUNTS..=SELF_TEST_MAX_COUNTS).contains(&m)
-        });
-        if ok {
-            Ok(response)
-        } else {
-            Err(SensorError::SelfTestFailed { response })
+        super::SelfTest {
+            register: reg::CTRL_REG1,
+            excited: CTRL_REG1_SELF_TEST,
+            running: CTRL_REG1_RUN,
+            output: reg::OUTX_L,
+            settle_ms: SETTLE_MS,
+            min: SELF_TEST_MIN_COUNTS,
+            max: SELF_TEST_MAX_COUNTS,
         }
-    }
-
-    async fn mean<D: DelayNs>(&mut self, delay: &mut D) -> Result<Axes, SensorError<B::Error>> {
-        super::mean_le_axes(&mut self.bus, reg::OUTX_L, delay).await
+        .run(&mut self.bus, delay)
+        .await
     }
 }
 

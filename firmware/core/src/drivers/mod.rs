@@ -115,3 +115,49 @@ pub(crate) async fn mean_le_axes<B: bus::RegisterBus, D: embedded_hal_async::del
     }
     Ok(axes_mean(&s))
 }
+
+/// The self-test both ST parts run (their datasheets' procedure): configure, wait, average the output, switch the
+/// self-test bit on in `register`, wait, average again, switch back to the running value, wait, and judge the
+/// per-axis change against `min..=max` counts in magnitude. Leaves the part running.
+pub(crate) struct SelfTest {
+    /// The control register holding the self-test bits.
+    pub register: u8,
+    /// Its value with the self-test on.
+    pub excited: u8,
+    /// Its running value.
+    pub running: u8,
+    /// The first of the six output registers (little-endian x, y, z).
+    pub output: u8,
+    /// Settling time after each change, milliseconds.
+    pub settle_ms: u32,
+    /// Smallest acceptable change, counts.
+    pub min: i16,
+    /// Largest acceptable change, counts.
+    pub max: i16,
+}
+
+impl SelfTest {
+    /// Runs the test on a part already configured for running; returns the per-axis change.
+    pub(crate) async fn run<B: bus::RegisterBus, D: embedded_hal_async::delay::DelayNs>(
+        &self,
+        bus: &mut B,
+        delay: &mut D,
+    ) -> Result<Axes, SensorError<B::Error>> {
+        delay.delay_ms(self.settle_ms).await;
+        let base = mean_le_axes(bus, self.output, delay).await?;
+        bus.write_register(self.register, self.excited).await?;
+        delay.delay_ms(self.settle_ms).await;
+        let excited = mean_le_axes(bus, self.output, delay).await?;
+        bus.write_register(self.register, self.running).await?;
+        delay.delay_ms(self.settle_ms).await;
+        let response = axes_sub(excited, base);
+        if response
+            .iter()
+            .all(|d| (self.min..=self.max).contains(&d.saturating_abs()))
+        {
+            Ok(response)
+        } else {
+            Err(SensorError::SelfTestFailed { response })
+        }
+    }
+}
