@@ -7,7 +7,7 @@
 #![allow(missing_docs)] // criterion_group! generates an undocumented public function.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use fires_host::track::synth::SplitMix64;
+use fires_host::rng::SplitMix64;
 use fires_host::vision::blobs::render_spots;
 use fires_host::vision::{BlobConfig, BlobDetector, GrayImage, Rect};
 use std::hint::black_box;

@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
-use fires_protocol::{Command, DecoderStats};
+use fires_protocol::Command;
 use fires_record::{
     CameraFrame as RecordedFrame, CameraStream, FrameContent, LinkChunk, Meta, PenGeometry,
     RecordingWriter, RigCalibration, Source,
@@ -28,8 +28,8 @@ use crate::clock::HostClock;
 use crate::link::{
     ButtonChange, LinkError, LinkEvent, LiveImuTimer, SerialConfig, SerialLink, TimedLinkEvent,
 };
-use crate::replay::rig::{imu_scale, pen_geometry, stereo_rig};
-use crate::session::{Session, SessionSample, StrokeConfig, StrokeOut};
+use crate::meta::{imu_scale, pen_geometry, stereo_rig};
+use crate::session::{Session, SessionSample, StrokeConfig};
 use crate::stereo::CameraId;
 use crate::track::fusion::ImuSample;
 use crate::track::pipeline::{CameraFrame, TrackQuality, Tracker, TrackerConfig};
@@ -71,7 +71,7 @@ pub struct LiveOutput {
     /// Tracker samples in time order (stereo frames, and IMU samples while dead-reckoning).
     pub samples: Vec<SessionSample>,
     /// Finished strokes.
-    pub strokes: Vec<StrokeOut>,
+    pub strokes: Vec<fires_record::Stroke>,
 }
 
 /// Totals of a live session.
@@ -79,10 +79,8 @@ pub struct LiveOutput {
 pub struct LiveSummary {
     /// Frames captured per camera.
     pub frames: [u64; 2],
-    /// Link bytes read.
-    pub link_bytes: u64,
-    /// The link decoder's totals.
-    pub link: LinkTotals,
+    /// Link bytes read and the decoder's totals.
+    pub link: fires_record::report::LinkSummary,
     /// Serial disconnects seen.
     pub disconnects: u64,
     /// Tracker samples from stereo frames.
@@ -106,33 +104,6 @@ pub struct LiveSummary {
     pub recording: Option<PathBuf>,
     /// Wall time, seconds.
     pub seconds: f64,
-}
-
-/// [`DecoderStats`] in a serialisable form.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct LinkTotals {
-    /// Sensor frames decoded.
-    pub sensor_frames: u64,
-    /// Status frames decoded.
-    pub status_frames: u64,
-    /// Checksum failures.
-    pub checksum_errors: u64,
-    /// Bytes skipped.
-    pub bytes_skipped: u64,
-    /// Packets lost (counter gaps).
-    pub lost: u64,
-}
-
-impl From<DecoderStats> for LinkTotals {
-    fn from(s: DecoderStats) -> Self {
-        LinkTotals {
-            sensor_frames: s.sensor_frames,
-            status_frames: s.status_frames,
-            checksum_errors: s.checksum_errors,
-            bytes_skipped: s.bytes_skipped,
-            lost: s.lost,
-        }
-    }
 }
 
 /// Errors of the live loop.
@@ -353,7 +324,7 @@ pub fn run_live(
                     reorder.push(Event::Frame(CameraFrame::from_blobs(id, f.t_ns, &blobs)));
                 }
                 Msg::Link(chunk) => {
-                    summary.link_bytes += chunk.bytes.len() as u64;
+                    summary.link.bytes += chunk.bytes.len() as u64;
                     timer.feed(&chunk, &mut link_events);
                     for e in link_events.drain(..) {
                         reorder.push(e.into());
@@ -391,7 +362,7 @@ pub fn run_live(
     session.finish(out.samples.last().map_or(0, |s| s.track.t_ns));
     out.strokes = session.into_strokes();
     summary.strokes = out.strokes.len() as u64;
-    summary.link = timer.stats().into();
+    summary.link.stats = timer.stats();
     summary.seconds = start.elapsed().as_secs_f64();
     if let Some(w) = writer {
         w.finish()?;

@@ -7,33 +7,19 @@ use std::time::Instant;
 
 use crate::link::ButtonChange;
 use crate::stroke::{
-    postprocess, CausalSmoother, GaussianConfig, PostprocessConfig, StrokeEvent, StrokeSegmenter,
+    stroke_record, CausalSmoother, GaussianConfig, StrokeEvent, StrokeRecordConfig, StrokeSegmenter,
 };
 use crate::track::fusion::ImuSample;
 use crate::track::pipeline::{CameraFrame, TrackSample, Tracker};
-
-/// One finished stroke.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct StrokeOut {
-    /// Stroke number, from 0 in order of pen-down.
-    pub id: u32,
-    /// Pen-down host time, nanoseconds.
-    pub t_start_ns: u64,
-    /// Pen-up host time, nanoseconds.
-    pub t_end_ns: u64,
-    /// Tracked tip points of the stroke (raw, as the tracker gave them), metres.
-    pub raw_points: usize,
-    /// The post-processed polyline (sampling, constrained B-spline, resampling), metres.
-    pub polyline_m: Vec<[f64; 3]>,
-}
+use fires_record::Stroke;
 
 /// Stroke settings of a session.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StrokeConfig {
     /// Display smoothing of the tip (thesis: 300 taps, 3 passes).
     pub smoothing: GaussianConfig,
-    /// Stroke post-processing.
-    pub postprocess: PostprocessConfig,
+    /// Post-processing and the strokes-file record of a finished stroke.
+    pub record: StrokeRecordConfig,
     /// Mask of the button that draws (bit 0 = button 1).
     pub draw_button_mask: u8,
 }
@@ -42,7 +28,7 @@ impl Default for StrokeConfig {
     fn default() -> Self {
         StrokeConfig {
             smoothing: GaussianConfig::default(),
-            postprocess: PostprocessConfig::default(),
+            record: StrokeRecordConfig::default(),
             draw_button_mask: 0b0001,
         }
     }
@@ -64,7 +50,11 @@ pub struct Session {
     segmenter: StrokeSegmenter,
     smoother: CausalSmoother,
     drawing: bool,
-    strokes: Vec<StrokeOut>,
+    /// Pen-down events so far: the next stroke's id.
+    pen_downs: u32,
+    /// Buttons held at the open stroke's pen-down.
+    buttons: u8,
+    strokes: Vec<Stroke>,
     strokes_ns: u64,
 }
 
@@ -77,6 +67,8 @@ impl Session {
             config,
             segmenter: StrokeSegmenter::default(),
             drawing: false,
+            pen_downs: 0,
+            buttons: 0,
             strokes: Vec::new(),
             strokes_ns: 0,
         }
@@ -89,7 +81,7 @@ impl Session {
 
     /// A button state from a status packet: pressing the draw button opens a stroke, releasing it
     /// closes and post-processes it. Returns the stroke that ended, if one did.
-    pub fn button(&mut self, change: ButtonChange) -> Option<&StrokeOut> {
+    pub fn button(&mut self, change: ButtonChange) -> Option<&Stroke> {
         let pressed = change.buttons & self.config.draw_button_mask != 0;
         if pressed == self.drawing {
             return None;
@@ -97,6 +89,7 @@ impl Session {
         self.drawing = pressed;
         if pressed {
             self.smoother.reset();
+            self.buttons = change.buttons;
         }
         let event = self.segmenter.button(change.t_ns, pressed);
         self.finish_stroke(event)
@@ -115,7 +108,7 @@ impl Session {
     }
 
     /// Closes a stroke still open at `end_ns` (the session ended with the button held).
-    pub fn finish(&mut self, end_ns: u64) -> Option<&StrokeOut> {
+    pub fn finish(&mut self, end_ns: u64) -> Option<&Stroke> {
         if !self.drawing {
             return None;
         }
@@ -125,7 +118,7 @@ impl Session {
     }
 
     /// The finished strokes so far.
-    pub fn strokes(&self) -> &[StrokeOut] {
+    pub fn strokes(&self) -> &[Stroke] {
         &self.strokes
     }
 
@@ -135,7 +128,7 @@ impl Session {
     }
 
     /// The finished strokes.
-    pub fn into_strokes(self) -> Vec<StrokeOut> {
+    pub fn into_strokes(self) -> Vec<Stroke> {
         self.strokes
     }
 
@@ -148,20 +141,19 @@ impl Session {
         }
     }
 
-    fn finish_stroke(&mut self, event: Option<StrokeEvent>) -> Option<&StrokeOut> {
-        let Some(StrokeEvent::Ended(stroke)) = event else {
-            return None;
+    fn finish_stroke(&mut self, event: Option<StrokeEvent>) -> Option<&Stroke> {
+        let ended = match event? {
+            StrokeEvent::Started { .. } => return None,
+            StrokeEvent::Discarded { .. } => None,
+            StrokeEvent::Ended(stroke) => Some(stroke),
         };
+        // Ids count pen-downs, kept or not, so re-tracking a session keeps every stroke's id.
+        let id = self.pen_downs;
+        self.pen_downs += 1;
+        let stroke = ended?;
         let t = Instant::now();
-        let raw: Vec<[f64; 3]> = stroke.points.iter().map(|p| p.p).collect();
-        let polyline_m = postprocess(&raw, &self.config.postprocess).unwrap_or(raw.clone());
-        self.strokes.push(StrokeOut {
-            id: self.strokes.len() as u32,
-            t_start_ns: stroke.t_start_ns,
-            t_end_ns: stroke.t_end_ns,
-            raw_points: raw.len(),
-            polyline_m,
-        });
+        let record = stroke_record(id, self.buttons, &stroke, &self.config.record);
+        self.strokes.push(record);
         self.strokes_ns += t.elapsed().as_nanos() as u64;
         self.strokes.last()
     }

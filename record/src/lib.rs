@@ -1,4 +1,4 @@
-//! FIRES recordings (architecture.md §4; the format is specified in `docs/recording.md`).
+//! FIRES recordings (docs/architecture.md §4; the format is specified in `docs/recording.md`).
 //!
 //! A recording is a directory:
 //! - `meta.json`: [`Meta`] (format version, rig calibration, pen geometry, board scale factors, camera streams);
@@ -15,6 +15,8 @@ pub mod error;
 pub mod image;
 pub mod meta;
 pub mod reader;
+pub mod report;
+pub mod strokes;
 pub mod truth;
 pub mod writer;
 
@@ -22,9 +24,13 @@ pub use error::RecordError;
 pub use image::GrayImage;
 pub use meta::{
     CalibratedCamera, CameraModel, CameraStream, Extrinsics, FrameContent, LinkInfo, Meta,
-    PenGeometry, RigCalibration, Source, FORMAT_MAJOR, FORMAT_NAME, FORMAT_VERSION,
+    PenGeometry, RigCalibration, Source, UndistortError, FORMAT_MAJOR, FORMAT_NAME, FORMAT_VERSION,
 };
 pub use reader::RecordingReader;
+pub use report::{ReplayReport, Report, REPORT_FORMAT, REPORT_VERSION};
+pub use strokes::{
+    Stroke, StrokePiece, StrokePoint, StrokesError, StrokesFile, STROKES_FORMAT, STROKES_VERSION,
+};
 pub use truth::{
     ExposureTruth, ImuTruth, Interval, LedTruth, PacketFate, PacketTruth, PoseTruth, StrokeKind,
     StrokeTruth, Visibility, WorldTruth,

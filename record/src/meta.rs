@@ -76,6 +76,52 @@ impl CameraModel {
         Some([self.fx * xd + self.cx, self.fy * yd + self.cy])
     }
 
+    /// True when every distortion coefficient is zero (a pure pinhole).
+    pub fn is_pinhole(&self) -> bool {
+        self.k1 == 0.0 && self.k2 == 0.0 && self.p1 == 0.0 && self.p2 == 0.0 && self.k3 == 0.0
+    }
+
+    /// Mean focal length in pixels (converts normalised distances to pixels).
+    pub fn focal_px(&self) -> f64 {
+        0.5 * (self.fx + self.fy)
+    }
+
+    /// Pixel to distorted normalised coordinates (no distortion removal).
+    pub fn pixel_to_distorted(&self, px: [f64; 2]) -> [f64; 2] {
+        [(px[0] - self.cx) / self.fx, (px[1] - self.cy) / self.fy]
+    }
+
+    /// Pixel to undistorted normalised image coordinates `m = K^-1 [u, v, 1]^T` with the distortion removed:
+    /// the inverse of [`Self::project`], by fixed-point iteration as OpenCV's `undistortPoints`, checked by
+    /// distorting the result again (an error when it does not come back within 1e-3 px).
+    pub fn undistort(&self, px: [f64; 2]) -> Result<[f64; 2], UndistortError> {
+        if !(px[0].is_finite() && px[1].is_finite()) {
+            return Err(UndistortError::NonFinite);
+        }
+        let [xd, yd] = self.pixel_to_distorted(px);
+        if self.is_pinhole() {
+            return Ok([xd, yd]);
+        }
+        let (mut x, mut y) = (xd, yd);
+        for _ in 0..30 {
+            let r2 = x * x + y * y;
+            let radial = 1.0 + r2 * (self.k1 + r2 * (self.k2 + r2 * self.k3));
+            let dx = 2.0 * self.p1 * x * y + self.p2 * (r2 + 2.0 * x * x);
+            let dy = self.p1 * (r2 + 2.0 * y * y) + 2.0 * self.p2 * x * y;
+            if radial.abs() < 1e-12 {
+                return Err(UndistortError::Diverged);
+            }
+            x = (xd - dx) / radial;
+            y = (yd - dy) / radial;
+        }
+        let [rx, ry] = self.distort_normalized(x, y);
+        let err = ((rx - xd).powi(2) + (ry - yd).powi(2)).sqrt() * self.focal_px();
+        if !(x.is_finite() && y.is_finite()) || err > 1e-3 {
+            return Err(UndistortError::Diverged);
+        }
+        Ok([x, y])
+    }
+
     /// Whether a pixel position lies on the sensor (within half a pixel of the outermost pixel centres).
     pub fn contains(&self, px: [f64; 2]) -> bool {
         px[0] >= -0.5
@@ -83,6 +129,17 @@ impl CameraModel {
             && px[0] < f64::from(self.width) - 0.5
             && px[1] < f64::from(self.height) - 0.5
     }
+}
+
+/// Why a pixel cannot be mapped back to normalised image coordinates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum UndistortError {
+    /// A pixel coordinate is NaN or infinite.
+    #[error("non-finite pixel")]
+    NonFinite,
+    /// The iteration did not converge (a pixel far outside the calibrated field).
+    #[error("undistortion did not converge")]
+    Diverged,
 }
 
 /// Rigid transform from the world frame to a camera frame: `x_cam = rotation * x_world + translation_m`

@@ -45,10 +45,11 @@ impl Default for SimOptions {
     }
 }
 
-/// What a run produced.
-#[derive(Clone, Debug, PartialEq)]
+/// What a run produced (`fires sim` prints it as one JSON line).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct SimSummary {
     /// Output directory.
+    #[serde(rename = "out")]
     pub out_dir: PathBuf,
     /// Scenario name.
     pub scenario: String,

@@ -204,7 +204,7 @@ pub fn axis_poses(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::track::synth::SplitMix64;
+    use crate::rng::SplitMix64;
 
     #[test]
     fn axis_poses_put_led_1_on_the_axis_from_any_labelled_leds() {

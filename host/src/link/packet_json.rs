@@ -104,37 +104,20 @@ fn reason_name(r: fires_protocol::StatusReason) -> String {
     }
 }
 
-/// The last line of `fires decode`: the decoder's counters.
+/// The last line of `fires decode`: the bytes read and the decoder's counters, tagged `kind: "summary"`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(tag = "kind", rename = "summary")]
 pub struct SummaryLine {
-    /// Bytes read.
-    pub bytes: u64,
-    /// Sensor packets decoded.
-    pub sensor_frames: u64,
-    /// Status packets decoded.
-    pub status_frames: u64,
-    /// Candidate frames whose checksum failed.
-    pub checksum_errors: u64,
-    /// Bytes that belong to no decoded packet.
-    pub bytes_skipped: u64,
-    /// Sensor packets missing (counter gaps, modulo 256).
-    pub lost: u64,
-    /// Repeated packets dropped.
-    pub duplicates: u64,
+    /// Bytes read and the decoder's counters (the `link` block of `report.json` too).
+    #[serde(flatten)]
+    pub link: fires_record::report::LinkSummary,
 }
 
 impl SummaryLine {
     /// Builds the summary from the decoder's counters and the number of bytes read.
-    pub fn new(bytes: u64, s: DecoderStats) -> Self {
+    pub fn new(bytes: u64, stats: DecoderStats) -> Self {
         SummaryLine {
-            bytes,
-            sensor_frames: s.sensor_frames,
-            status_frames: s.status_frames,
-            checksum_errors: s.checksum_errors,
-            bytes_skipped: s.bytes_skipped,
-            lost: s.lost,
-            duplicates: s.duplicates,
+            link: fires_record::report::LinkSummary { bytes, stats },
         }
     }
 }

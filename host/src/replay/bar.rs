@@ -1,4 +1,4 @@
-//! The thesis's bar experiment (§7.1, experiment 1; digest §7.1): a rigid bar with one LED at each end (81.0 mm)
+//! The thesis's bar experiment (§7.1, experiment 1): a rigid bar with one LED at each end (81.0 mm)
 //! moved through the working volume; each stereo frame gives one measured length. The thesis reports 75% of
 //! lengths within ±2 mm at up to 1 m.
 //!
@@ -12,10 +12,11 @@
 //! quadratic fit of each LED's track over a short window, the same frames every tracked point sees);
 //! the single-frame figure is reported beside it.
 
+pub use fires_record::report::{BarFigures, BarSmoothing};
 use fires_record::{CameraFrame, ExposureTruth, RecordingReader};
 
-use super::rig::stereo_rig;
 use super::ReplayError;
+use crate::meta::stereo_rig;
 use crate::stereo::{StereoRig, TriangulationMethod, Triangulator};
 
 /// Total ray gap under which the second pairing is also plausible, metres.
@@ -36,23 +37,6 @@ pub struct BarSample {
     pub leds_m: [[f64; 3]; 2],
 }
 
-/// Bar accuracy figures.
-#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
-pub struct BarReport {
-    /// Nominal bar length from the recording's pen geometry, millimetres.
-    pub bar_nominal_mm: f64,
-    /// Frames measured.
-    pub bar_frames: usize,
-    /// Frames measured at most 1 m from the left camera.
-    pub bar_frames_le_1m: usize,
-    /// Fraction of those within ±2 mm of the nominal length.
-    pub bar_frac_within_2mm_le_1m: f64,
-    /// Fraction of all measured frames within ±2 mm.
-    pub bar_frac_within_2mm: f64,
-    /// RMS length error over frames at most 1 m away, millimetres.
-    pub bar_rmse_mm_le_1m: f64,
-}
-
 impl BarSample {
     /// A sample from the two measured LED positions.
     fn new(index: u64, t_ns: u64, leds: [nalgebra::Vector3<f64>; 2]) -> Self {
@@ -62,25 +46,6 @@ impl BarSample {
             length_m: (leds[0] - leds[1]).norm(),
             range_m: ((leds[0] + leds[1]) / 2.0).norm(),
             leds_m: leds.map(Into::into),
-        }
-    }
-}
-
-/// Temporal filter of the LED positions used for the headline bar figure.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct BarSmoothing {
-    /// Half width of the window around each frame, nanoseconds.
-    pub half_window_ns: u64,
-    /// Fewest frames in the window for a fit (else the frame keeps its single-frame length).
-    pub min_frames: usize,
-}
-
-impl Default for BarSmoothing {
-    fn default() -> Self {
-        // ±40 ms: 9 frames at 100 Hz; a minimum-jerk hand move changes curvature far more slowly.
-        BarSmoothing {
-            half_window_ns: 40_000_000,
-            min_frames: 5,
         }
     }
 }
@@ -238,7 +203,7 @@ pub fn bar_report(
     samples: &[BarSample],
     nominal_m: f64,
     truth: Option<&[ExposureTruth]>,
-) -> BarReport {
+) -> BarFigures {
     let by_index: std::collections::HashMap<u64, &ExposureTruth> = truth
         .into_iter()
         .flatten()
@@ -280,7 +245,7 @@ pub fn bar_report(
             / near.len() as f64)
             .sqrt()
     };
-    BarReport {
+    BarFigures {
         bar_nominal_mm: nominal_m * 1e3,
         bar_frames: samples.len(),
         bar_frames_le_1m: near.len(),
@@ -288,6 +253,56 @@ pub fn bar_report(
         bar_frac_within_2mm: frac(&all),
         bar_rmse_mm_le_1m: rmse * 1e3,
     }
+}
+
+/// The bar experiment of a two-LED recording: the report (every triangulation method, filtered and per
+/// frame) and, for midpoint triangulation, the measured lengths (`bar.json`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BarExperiment {
+    /// The report (`report.json`, `kind: "bar"`).
+    pub report: fires_record::report::BarReport,
+    /// Filtered midpoint samples.
+    pub samples: Vec<BarSample>,
+    /// Single-frame midpoint samples.
+    pub single_frame_samples: Vec<BarSample>,
+}
+
+/// Measures the bar with every triangulation method (FIRES thesis §7.1).
+pub fn bar_experiment(reader: &RecordingReader) -> Result<BarExperiment, ReplayError> {
+    use fires_record::report::{BarMethod, BarReport, REPORT_FORMAT, REPORT_VERSION};
+    let l = &reader.meta().pen.led_positions_m;
+    let nominal = match l.as_slice() {
+        [a, b] => (b - a).abs(),
+        _ => 0.0,
+    };
+    let truth = reader.exposure_truth()?;
+    let smoothing = BarSmoothing::default();
+    let measure = |method| -> Result<(BarMethod, Vec<BarSample>, Vec<BarSample>), ReplayError> {
+        let single = measure_bar(reader, method)?;
+        let filtered = smooth_bar(&single, smoothing);
+        let figures = BarMethod {
+            filtered: bar_report(&filtered, nominal, truth.as_deref()),
+            single_frame: bar_report(&single, nominal, truth.as_deref()),
+        };
+        Ok((figures, filtered, single))
+    };
+    let (midpoint, samples, single_frame_samples) = measure(TriangulationMethod::Midpoint)?;
+    let (linear, ..) = measure(TriangulationMethod::Linear)?;
+    let (normal_equations, ..) = measure(TriangulationMethod::NormalEquations)?;
+    Ok(BarExperiment {
+        report: BarReport {
+            format: REPORT_FORMAT.into(),
+            version: REPORT_VERSION.into(),
+            recording: reader.dir().to_path_buf(),
+            bar_smoothing: smoothing,
+            headline: midpoint.clone(),
+            method_midpoint: midpoint,
+            method_linear: linear,
+            method_normal_equations: normal_equations,
+        },
+        samples,
+        single_frame_samples,
+    })
 }
 
 #[cfg(test)]

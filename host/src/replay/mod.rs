@@ -1,5 +1,5 @@
 //! Replay: one pipeline from a recording (simulated or of real hardware) to strokes, per-frame tracks and a
-//! report (architecture.md §1, §4). Live tracking feeds the same [`crate::session::Session`]; replaying the same
+//! report (docs/architecture.md §1, §4). Live tracking feeds the same [`crate::session::Session`]; replaying the same
 //! recording twice gives identical output, since nothing here reads a clock.
 //!
 //! Stages: link bytes -> [`imu_stream`] (decode, sample times, buttons) -> camera frames (blob lists, or 8-bit
@@ -12,7 +12,6 @@ pub mod imu_stream;
 pub mod plot;
 pub mod plot_text;
 pub mod report;
-pub mod rig;
 pub mod run;
 
-pub use run::{replay, ReplayConfig, ReplayError, ReplayOutput, StrokeOut, WorldSource};
+pub use run::{replay, ReplayConfig, ReplayError, ReplayOutput, WorldSource};

@@ -4,6 +4,7 @@
 //! the axes start at zero and carry their tick values and titles, grey grid lines mark the tick steps that
 //! [`PlotScale`] reports (and `report.json` repeats), and the red line marks the 2 mm accuracy target.
 
+pub use fires_record::report::PlotScale;
 use std::path::Path;
 
 use plotters::prelude::*;
@@ -18,21 +19,6 @@ pub const TIP_ERROR_SIZE: (u32, u32) = (1000, 500);
 
 /// The accuracy target drawn as a red line, millimetres.
 pub const TARGET_MM: f64 = 2.0;
-
-/// The scale of a written plot (also written to `report.json`).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct PlotScale {
-    /// The x axis spans 0..x_max_s seconds.
-    pub x_max_s: f64,
-    /// One vertical grid line every x_tick_s seconds.
-    pub x_tick_s: f64,
-    /// The y axis spans 0..y_max_mm millimetres (larger errors are drawn orange, on the top edge).
-    pub y_max_mm: f64,
-    /// One horizontal grid line every y_tick_mm millimetres.
-    pub y_tick_mm: f64,
-    /// Points drawn.
-    pub points: usize,
-}
 
 /// A plot could not be drawn or written.
 #[derive(Debug, thiserror::Error)]

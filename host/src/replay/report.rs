@@ -8,8 +8,8 @@
 
 use std::collections::HashMap;
 
+pub use fires_record::report::{Accuracy, WorldReport};
 use fires_record::ExposureTruth;
-use serde::Serialize;
 
 use super::run::ReplayOutput;
 use crate::track::fusion::WorldReference;
@@ -17,25 +17,6 @@ use crate::track::pipeline::TrackQuality;
 
 /// A labelled blob farther than this from the true image of its LED is not that LED's image, pixels.
 pub const MISLABEL_PX: f64 = 3.0;
-
-/// Tip accuracy figures (present when the recording has ground truth).
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct Accuracy {
-    /// Root mean square tip error, millimetres.
-    pub tip_rmse_mm: f64,
-    /// 95th percentile tip error, millimetres.
-    pub tip_p95_mm: f64,
-    /// Fraction of tracked frames with the tip within 2 mm.
-    pub frac_within_2mm: f64,
-    /// The same over frames whose tip is at most 1 m from the left camera.
-    pub frac_within_2mm_le_1m: f64,
-    /// Frames (tracked, with truth) at most 1 m from the left camera.
-    pub frames_le_1m: usize,
-    /// Accepted LED labels that name the wrong LED.
-    pub mislabels: usize,
-    /// Accepted LED labels checked.
-    pub labels_checked: usize,
-}
 
 /// Interpolates the true tip and LEDs at `t_ns` from time-sorted exposure truth of one camera.
 pub fn truth_at(truth: &[&ExposureTruth], t_ns: u64) -> Option<([f64; 3], Vec<[f64; 3]>)> {
@@ -176,26 +157,6 @@ pub fn accuracy(out: &ReplayOutput, truth: &[ExposureTruth]) -> Accuracy {
     }
 }
 
-/// Where the world reference came from and, when it was estimated and the recording has ground
-/// truth, how far the estimate is from the truth.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct WorldReport {
-    /// "truth", "configured" or "estimated".
-    pub source: String,
-    /// Seconds from the first IMU sample to the first accepted estimate.
-    pub accepted_after_s: Option<f64>,
-    /// Axis pairs behind the final estimate (inliers / all).
-    pub pairs: Option<[usize; 2]>,
-    /// RMS residual of the final fit, degrees.
-    pub residual_rms_deg: Option<f64>,
-    /// Standard deviation of the worst-determined axis of the final fit, degrees.
-    pub worst_axis_sigma_deg: Option<f64>,
-    /// Angle between the estimated and the true "up", degrees.
-    pub up_error_deg: Option<f64>,
-    /// Angle between the estimated and the true magnetic north (horizontal), degrees.
-    pub heading_error_deg: Option<f64>,
-}
-
 /// The world-reference part of the report.
 pub fn world_report(out: &ReplayOutput, truth: Option<&WorldReference>) -> WorldReport {
     let mut r = WorldReport {
@@ -221,4 +182,92 @@ pub fn world_report(out: &ReplayOutput, truth: Option<&WorldReference>) -> World
         );
     }
     r
+}
+
+/// The whole report of a replayed pen session (`report.json`, `kind: "replay"`); `fusion` names the
+/// direction filter used. The tip-error plot is added by whoever draws it.
+pub fn replay_report(
+    reader: &fires_record::RecordingReader,
+    out: &ReplayOutput,
+    fusion: &str,
+) -> Result<fires_record::ReplayReport, fires_record::RecordError> {
+    use fires_record::report::{Latency, LinkSummary, StageMs};
+    let count = |f: &dyn Fn(&crate::track::pipeline::TrackSample) -> bool| {
+        out.samples.iter().filter(|s| f(s)).count()
+    };
+    let frames = out.samples.len().max(1) as f64;
+    let world_truth = reader.world_truth()?;
+    let exposure_truth = reader.exposure_truth()?;
+    let t = &out.times;
+    let mut report = fires_record::ReplayReport {
+        format: fires_record::REPORT_FORMAT.into(),
+        version: fires_record::REPORT_VERSION.into(),
+        recording: Some(reader.dir().to_path_buf()),
+        fusion: fusion.into(),
+        frames: out.samples.len(),
+        frames_tracked: count(&|s| s.tip.is_some()),
+        frames_vision: count(&|s| matches!(s.quality, TrackQuality::Vision { .. })),
+        camera_frames: out.frames,
+        strokes: out.strokes.len(),
+        world_reference: out.world_reference.into(),
+        world: world_report(
+            out,
+            world_truth
+                .as_ref()
+                .map(super::run::world_reference)
+                .as_ref(),
+        ),
+        magnetometer: mag_report(out.mag_offset.as_ref(), world_truth.as_ref()),
+        link: LinkSummary {
+            bytes: out.imu.bytes,
+            stats: out.imu.stats,
+        },
+        latency_us_per_frame: Latency {
+            blobs: t.blobs_ns as f64 / 1e3 / frames,
+            track: t.track_ns as f64 / 1e3 / frames,
+        },
+        stage_ms: StageMs {
+            link: t.link_ns as f64 / 1e6,
+            blobs: t.blobs_ns as f64 / 1e6,
+            track: t.track_ns as f64 / 1e6,
+            strokes: t.strokes_ns as f64 / 1e6,
+        },
+        wall_ms: out.wall_ns as f64 / 1e6,
+        accuracy: None,
+        realtime_factor: None,
+        tip_error_plot: None,
+    };
+    if let Some(truth) = exposure_truth {
+        report.accuracy = Some(accuracy(out, &truth));
+        let t0 = truth.iter().map(|e| e.exposure_time_ns).min().unwrap_or(0);
+        let t1 = truth.iter().map(|e| e.exposure_time_ns).max().unwrap_or(0);
+        let duration_s = (t1 - t0) as f64 / 1e9;
+        report.realtime_factor = Some(duration_s / (out.wall_ns as f64 / 1e9));
+    }
+    Ok(report)
+}
+
+/// The hard-iron offset found in the session and, with ground truth, its error (microtesla).
+pub fn mag_report(
+    offset: Option<&crate::track::fusion::MagOffset>,
+    truth: Option<&fires_record::WorldTruth>,
+) -> fires_record::report::MagReport {
+    let Some(o) = offset else {
+        return fires_record::report::MagReport::default();
+    };
+    // Readings are in microtesla (the recording's scale factors), the truth in tesla.
+    let hard_iron_error = truth.map(|t| {
+        (0..3)
+            .map(|k| (o.hard_iron[k] - t.hard_iron_t[k] * 1e6).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    });
+    fires_record::report::MagReport {
+        calibrated: true,
+        hard_iron: Some(o.hard_iron),
+        field: Some(o.field),
+        sigma_of_field: Some(o.sigma),
+        samples: Some(o.samples),
+        hard_iron_error,
+    }
 }

@@ -5,8 +5,8 @@ use std::time::Instant;
 use fires_record::{FrameContent, RecordError, RecordingReader};
 
 use super::imu_stream::{imu_stream, ImuStream};
-use super::rig::{imu_scale, pen_geometry, stereo_rig, MetaError};
-pub use crate::session::StrokeOut;
+use crate::meta::{imu_scale, pen_geometry, stereo_rig, MetaError};
+
 use crate::session::{Session, StrokeConfig};
 use crate::stereo::CameraId;
 use crate::track::fusion::{MagOffset, WorldFit, WorldReference};
@@ -98,7 +98,7 @@ pub struct ReplayOutput {
     /// For each sample, the image blobs its labels name (None for IMU-driven samples).
     pub label_pixels: Vec<Option<LabelPixels>>,
     /// Finished strokes.
-    pub strokes: Vec<StrokeOut>,
+    pub strokes: Vec<fires_record::Stroke>,
     /// The link as decoded.
     pub imu: ImuStream,
     /// Camera frames read, per camera.

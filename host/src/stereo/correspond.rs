@@ -1,4 +1,4 @@
-//! Stereo correspondence (digest §2.2, "recommended robust algorithm" steps 1-2): every left blob is
+//! Stereo correspondence (FIRES thesis, §4.1.2, made robust): every left blob is
 //! paired with every right blob (at most 16 pairs for 4+4 LEDs), each pair is gated by its epipolar
 //! distance and triangulated; pairs with a large ray gap, out of the depth range or with degenerate
 //! geometry are dropped. The surviving candidates go to LED identification, which picks a

@@ -1,4 +1,4 @@
-//! Stereo geometry for the two tracking cameras (seed-002 digest §2.1, thesis §4.1.1).
+//! Stereo geometry for the two tracking cameras (FIRES thesis, §4.1.1).
 //!
 //! Conventions (shared with `fires-record` so a later `From` is a few lines): OpenCV camera frame
 //! (x right, y down, z forward), world frame = left camera frame, SI units (metres, radians),
@@ -14,7 +14,7 @@ pub mod correspond;
 pub mod rig;
 pub mod triangulate;
 
-pub use camera::{CameraIntrinsics, Distortion, ProjectionError};
+pub use camera::{project, CameraModel, ProjectionError};
 pub use correspond::{Candidate, CorrespondenceConfig, Correspondences};
 pub use rig::{CameraId, StereoRig};
 pub use triangulate::{Triangulated, TriangulationError, TriangulationMethod, Triangulator};

@@ -5,16 +5,16 @@
 //! Precomputes the essential matrix `E = [t]x R` used by the epipolar gate and the
 //! normalised projection matrices `[I | 0]`, `[R | t]` used by the linear method (eq. 4.6).
 
-use super::camera::{CameraIntrinsics, ProjectionError};
+use super::camera::{project, CameraModel, ProjectionError};
 use nalgebra::{Matrix3, Matrix3x4, Rotation3, Vector3};
 
 /// A calibrated stereo pair.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StereoRig {
     /// Left camera (defines the world frame).
-    pub left: CameraIntrinsics,
+    pub left: CameraModel,
     /// Right camera.
-    pub right: CameraIntrinsics,
+    pub right: CameraModel,
     /// Rotation taking left-frame vectors into the right frame.
     pub r_right_from_left: Matrix3<f64>,
     /// Translation of the right-from-left transform (metres): `X_r = R X_l + t`.
@@ -35,8 +35,8 @@ pub enum CameraId {
 impl StereoRig {
     /// Builds the rig; the rotation is re-orthonormalised.
     pub fn new(
-        left: CameraIntrinsics,
-        right: CameraIntrinsics,
+        left: CameraModel,
+        right: CameraModel,
         r_right_from_left: Matrix3<f64>,
         t_right_from_left: Vector3<f64>,
     ) -> Self {
@@ -57,7 +57,7 @@ impl StereoRig {
     /// The thesis/issue reference rig: two identical cameras with the given resolution and
     /// horizontal FOV, parallel axes, right camera `baseline` metres to the right (+x).
     pub fn parallel(width: u32, height: u32, hfov: f64, baseline: f64) -> Self {
-        let cam = CameraIntrinsics::from_hfov(width, height, hfov);
+        let cam = CameraModel::from_hfov(width, height, hfov);
         Self::new(
             cam,
             cam,
@@ -73,7 +73,7 @@ impl StereoRig {
 
     /// Fundamental matrix `F = K_r^-T E K_l^-1` (pixel coordinates, undistorted).
     pub fn fundamental(&self) -> Matrix3<f64> {
-        let k_inv = |c: &CameraIntrinsics| {
+        let k_inv = |c: &CameraModel| {
             Matrix3::new(
                 1.0 / c.fx,
                 0.0,
@@ -122,13 +122,13 @@ impl StereoRig {
     /// Projects a world point into the given camera (distorted pixels).
     pub fn project(&self, camera: CameraId, p: &Vector3<f64>) -> Result<[f64; 2], ProjectionError> {
         match camera {
-            CameraId::Left => self.left.project(p),
-            CameraId::Right => self.right.project(&self.to_right(p)),
+            CameraId::Left => project(&self.left, p),
+            CameraId::Right => project(&self.right, &self.to_right(p)),
         }
     }
 
     /// Intrinsics of one camera.
-    pub fn camera(&self, camera: CameraId) -> &CameraIntrinsics {
+    pub fn camera(&self, camera: CameraId) -> &CameraModel {
         match camera {
             CameraId::Left => &self.left,
             CameraId::Right => &self.right,
@@ -154,7 +154,7 @@ mod tests {
     use nalgebra::Rotation3;
 
     fn rig() -> StereoRig {
-        let cam = CameraIntrinsics::from_hfov(1024, 768, 45f64.to_radians());
+        let cam = CameraModel::from_hfov(1024, 768, 45f64.to_radians());
         let r = Rotation3::from_euler_angles(0.01, -0.12, 0.02).into_inner();
         StereoRig::new(cam, cam, r, Vector3::new(-0.25, 0.01, 0.02))
     }

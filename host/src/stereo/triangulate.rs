@@ -1,4 +1,4 @@
-//! The thesis's three triangulation methods (§4.1.1, digest §2.1), selectable, on undistorted
+//! The thesis's three triangulation methods (§4.1.1), selectable, on undistorted
 //! normalised image coordinates `m_l`, `m_r`:
 //!
 //! - [`TriangulationMethod::NormalEquations`]: eqs. 4.1-4.5 with the corrected 3x2 matrix
@@ -225,7 +225,7 @@ impl Triangulator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stereo::{rig::CameraId, CameraIntrinsics};
+    use crate::stereo::{rig::CameraId, CameraModel};
     use nalgebra::Rotation3;
     use proptest::prelude::*;
 
@@ -236,7 +236,7 @@ mod tests {
     ];
 
     fn rig(yaw: f64, baseline: f64) -> StereoRig {
-        let cam = CameraIntrinsics::from_hfov(1024, 768, 45f64.to_radians());
+        let cam = CameraModel::from_hfov(1024, 768, 45f64.to_radians());
         let r = Rotation3::from_euler_angles(0.01, yaw, -0.015).into_inner();
         StereoRig::new(cam, cam, r, Vector3::new(-baseline, 0.005, 0.01))
     }

@@ -1,11 +1,13 @@
-//! Stroke processing (thesis §4.1.3, digest §2.4): real-time Gaussian smoothing of the tip for
+//! Stroke processing (thesis §4.1.3): real-time Gaussian smoothing of the tip for
 //! display, stroke segmentation by the pen button, and the end-of-stroke post-processing
 //! (distance-threshold sampling, constrained weighted least-squares cubic B-spline, resampling).
 
 pub mod postprocess;
+pub mod record;
 pub mod segment;
 pub mod smooth;
 
 pub use postprocess::{postprocess, BSpline, PostprocessConfig, StrokeError};
+pub use record::{stroke_record, StrokeRecordConfig};
 pub use segment::{Stroke, StrokeEvent, StrokeSegmenter, TimedPoint};
 pub use smooth::{smooth_centred, CausalSmoother, GaussianConfig};

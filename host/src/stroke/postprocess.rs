@@ -313,7 +313,7 @@ fn chord_params(points: &[[f64; 3]]) -> Result<Vec<f64>, StrokeError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::track::synth::SplitMix64;
+    use crate::rng::SplitMix64;
 
     fn helix(t: f64) -> [f64; 3] {
         [0.05 * (3.0 * t).cos(), 0.05 * (3.0 * t).sin(), 0.03 * t]

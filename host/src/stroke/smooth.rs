@@ -117,7 +117,7 @@ impl CausalSmoother {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::track::synth::SplitMix64;
+    use crate::rng::SplitMix64;
 
     #[test]
     fn reproduces_lines_away_from_the_ends_and_reduces_noise_20x() {

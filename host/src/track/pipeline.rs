@@ -1055,7 +1055,7 @@ impl Tracker {
     }
 }
 
-fn undistort_all(cam: &crate::stereo::CameraIntrinsics, px: &[[f64; 2]], out: &mut Vec<[f64; 2]>) {
+fn undistort_all(cam: &crate::stereo::CameraModel, px: &[[f64; 2]], out: &mut Vec<[f64; 2]>) {
     out.clear();
     // A blob that cannot be undistorted is replaced by a NaN point, which the triangulation
     // rejects, so blob indices stay aligned with the frame.

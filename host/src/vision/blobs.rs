@@ -566,7 +566,7 @@ pub fn render_spots(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::track::synth::SplitMix64;
+    use crate::rng::SplitMix64;
 
     #[test]
     fn subpixel_centroids_of_gaussian_spots() {
@@ -692,7 +692,7 @@ mod tests {
 #[cfg(test)]
 mod noise_tests {
     use super::*;
-    use crate::track::synth::SplitMix64;
+    use crate::rng::SplitMix64;
 
     /// Sensor noise of 2/4/8 grey levels on a 180-level spot (σ 1.3 px) over a level-20
     /// background: RMS centroid error (measured 0.023 / 0.046 / 0.095 px on 640x480).

@@ -1,4 +1,5 @@
-//! `fires replay` on a short simulated session: its outputs, the tip-error plot among them.
+//! `fires replay` on a short simulated session: its outputs (the tip-error plot, and the report and strokes
+//! files through their typed readers).
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -48,6 +49,15 @@ fn replay_writes_a_tip_error_png() {
     let scale = &report["tip_error_plot"]["scale"];
     assert!(scale["points"].as_u64().expect("points") > 100, "{report}");
     assert!(scale["y_max_mm"].as_f64().expect("y max") >= 3.0);
+    // Both files read back through their typed readers (docs/report.md, docs/strokes.md).
+    let typed = fires_record::Report::from_json(&std::fs::read(out.join("report.json")).unwrap())
+        .expect("typed report");
+    let fires_record::Report::Replay(typed) = typed else {
+        panic!("a pen session gives a replay report")
+    };
+    let strokes = fires_record::StrokesFile::read(&out.join("strokes.json")).expect("strokes");
+    assert_eq!(typed.strokes, strokes.strokes.len());
+    assert!(typed.accuracy.is_some() && typed.tip_error_plot.is_some());
     let _ = std::fs::remove_dir_all(&rec);
     let _ = std::fs::remove_dir_all(&out);
 }

@@ -2,8 +2,8 @@
 
 use std::path::PathBuf;
 
-use super::replay::{replay_to_dir, ReplayArgs};
-use super::sim::{simulate, SimArgs};
+use crate::replay::{replay_to_dir, Fusion, ReplayArgs, World};
+use crate::sim::{simulate, SessionArgs, SimArgs};
 
 /// Arguments of `fires demo`.
 #[derive(Debug, clap::Args)]
@@ -11,15 +11,9 @@ pub struct DemoArgs {
     /// Output folder: the recording goes to OUT/recording, the tracker's outputs to OUT/replay.
     #[arg(long, default_value = "fires-demo")]
     pub out: PathBuf,
-    /// Scenario to simulate (see `fires sim --help`).
-    #[arg(long, default_value = "fires-v2")]
-    pub scenario: String,
-    /// Random seed.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Simulated seconds.
-    #[arg(long, default_value_t = 20.0)]
-    pub duration: f64,
+    /// Scenario, seed and duration of the simulated session.
+    #[command(flatten)]
+    pub session: SessionArgs,
 }
 
 /// Simulates, replays and prints a summary line.
@@ -30,9 +24,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             .map_err(|e| anyhow::anyhow!("cannot clear {}: {e}", rec.display()))?;
     }
     let sim = simulate(&SimArgs {
-        scenario: args.scenario.clone(),
-        seed: args.seed,
-        duration: args.duration,
+        session: args.session.clone(),
         out: rec.clone(),
         no_images: false,
         no_truth: false,
@@ -50,13 +42,13 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     let report = replay_to_dir(&ReplayArgs {
         recording: rec,
         out: args.out.join("replay"),
-        fusion: "orientation".into(),
-        world: "estimate".into(),
+        fusion: Fusion::Orientation,
+        world: World::Estimate,
     })?;
     eprintln!(
         "tracked; strokes, track and report in {}",
         args.out.join("replay").display()
     );
-    println!("{report}");
+    println!("{}", serde_json::to_string(&report)?);
     Ok(())
 }

@@ -16,7 +16,7 @@ use fires_host::live::{run_live, LiveConfig, LiveOutput, DEFAULT_REORDER_NS};
 use fires_host::replay::ReplayConfig;
 use fires_record::RigCalibration;
 
-use super::replay::{write_json, write_track_csv};
+use crate::output::{write_json, write_strokes, write_track_csv};
 
 /// Arguments of `fires track`.
 #[derive(Debug, clap::Args)]
@@ -99,7 +99,7 @@ fn camera(device: &str) -> anyhow::Result<SourceOpener> {
 #[cfg(not(feature = "camera"))]
 fn camera(_device: &str) -> anyhow::Result<SourceOpener> {
     anyhow::bail!(
-        "fires track needs the `camera` feature: build with `cargo build --release -p fires-host --features camera` (needs libv4l-dev and clang)"
+        "fires track needs the `camera` feature: build with `cargo build --release -p fires-cli --features camera` (needs libv4l-dev and clang)"
     )
 }
 
@@ -146,10 +146,7 @@ pub fn run(args: &TrackArgs) -> anyhow::Result<()> {
 /// strokes.json, track.csv and report.json of a live session, as `fires replay` writes them.
 pub fn write_live_outputs(dir: &std::path::Path, out: &LiveOutput) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    write_json(
-        &dir.join("strokes.json"),
-        &serde_json::json!({ "strokes": out.strokes }),
-    )?;
+    write_strokes(&dir.join("strokes.json"), &out.strokes)?;
     let samples: Vec<_> = out.samples.iter().map(|s| s.track).collect();
     let display: Vec<_> = out.samples.iter().map(|s| s.display_tip).collect();
     write_track_csv(&dir.join("track.csv"), &samples, &display)?;

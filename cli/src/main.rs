@@ -4,7 +4,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-mod cli;
+use fires_cli as cli;
 
 /// FIRES: track a smart-pen with two cameras, turn the drawn curves into surfaces.
 #[derive(Debug, Parser)]

@@ -9,7 +9,7 @@ use fires_host::calibrate::pivot::{axis_poses, pivot_axis};
 use fires_host::replay::{replay, ReplayConfig};
 use fires_record::RecordingReader;
 
-use super::replay::write_json;
+use crate::output::write_json;
 
 /// Largest RMS scatter of the per-frame tips around the pivot, millimetres: a tip that stayed on one point
 /// scatters about the tracking noise (about 1 mm at 0.7 m); more means the gesture was not a pivot.
@@ -31,7 +31,7 @@ pub fn pivot_to_json(args: &PivotArgs) -> anyhow::Result<serde_json::Value> {
         .with_context(|| format!("cannot open recording {}", args.recording.display()))?;
     let out = replay(&reader, &ReplayConfig::default())
         .with_context(|| format!("tracking {}", args.recording.display()))?;
-    let pen = fires_host::replay::rig::pen_geometry(reader.meta())?;
+    let pen = fires_host::meta::pen_geometry(reader.meta())?;
     let poses = axis_poses(&out.samples, &pen);
     let fit = pivot_axis(&poses).with_context(|| {
         format!(

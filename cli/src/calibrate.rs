@@ -72,6 +72,6 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
 pub fn run(_args: &CalibrateArgs) -> anyhow::Result<()> {
     anyhow::bail!(
         "this build has no OpenCV support; install libopencv-dev, clang and libclang-dev, then rebuild with \
-         `cargo build --release -p fires-host --features opencv`"
+         `cargo build --release -p fires-cli --features opencv`"
     )
 }

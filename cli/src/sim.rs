@@ -7,11 +7,10 @@ use anyhow::Context;
 use fires_sim::objects::ObjectKind;
 use fires_sim::{run_scenario, SimOptions, SimSummary, SCENARIOS};
 
-/// Arguments of `fires sim`.
-#[derive(Debug, clap::Args)]
-#[command(after_help = scenario_help())]
-pub struct SimArgs {
-    /// Named scenario (see the list below).
+/// What to simulate: shared by `fires sim` and `fires demo`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SessionArgs {
+    /// Named scenario (see `fires sim --help` for the list).
     #[arg(long, default_value = "fires-v2")]
     pub scenario: String,
     /// Random seed; the same seed gives a byte-identical recording.
@@ -20,6 +19,15 @@ pub struct SimArgs {
     /// Simulated duration, seconds.
     #[arg(long, default_value_t = 20.0)]
     pub duration: f64,
+}
+
+/// Arguments of `fires sim`.
+#[derive(Debug, clap::Args)]
+#[command(after_help = scenario_help())]
+pub struct SimArgs {
+    /// Scenario, seed and duration.
+    #[command(flatten)]
+    pub session: SessionArgs,
     /// Output directory of the recording (created; must not hold another recording).
     #[arg(long)]
     pub out: PathBuf,
@@ -54,38 +62,41 @@ pub fn simulate(args: &SimArgs) -> anyhow::Result<SimSummary> {
         object: args.object,
         truth: !args.no_truth,
     };
-    run_scenario(&args.scenario, args.seed, args.duration, &args.out, opts).with_context(|| {
+    let session = &args.session;
+    run_scenario(
+        &session.scenario,
+        session.seed,
+        session.duration,
+        &args.out,
+        opts,
+    )
+    .with_context(|| {
         format!(
             "simulation of '{}' into {}",
-            args.scenario,
+            session.scenario,
             args.out.display()
         )
     })
+}
+
+/// The line `fires sim` prints: the simulator's summary and the wall time.
+#[derive(serde::Serialize)]
+struct SimLine<'a> {
+    kind: &'static str,
+    #[serde(flatten)]
+    summary: &'a SimSummary,
+    wall_s: f64,
 }
 
 /// `fires sim`: simulate and print a one-line JSON summary.
 pub fn run(args: &SimArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let s = simulate(args)?;
-    let line = serde_json::json!({
-        "kind": "sim",
-        "scenario": s.scenario,
-        "seed": s.seed,
-        "duration_s": s.duration_s,
-        "out": s.out_dir,
-        "imu_samples": s.imu_samples,
-        "status_packets": s.status_packets,
-        "delivered": s.delivered,
-        "pen_dropped": s.pen_dropped,
-        "lost": s.lost,
-        "disconnected": s.disconnected,
-        "damaged": s.damaged,
-        "link_bytes": s.link_bytes,
-        "frames": s.frames,
-        "images": s.images,
-        "strokes": s.strokes,
-        "wall_s": start.elapsed().as_secs_f64(),
-    });
-    println!("{line}");
+    let line = SimLine {
+        kind: "sim",
+        summary: &s,
+        wall_s: start.elapsed().as_secs_f64(),
+    };
+    println!("{}", serde_json::to_string(&line)?);
     Ok(())
 }

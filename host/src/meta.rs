@@ -1,9 +1,10 @@
-//! Conversions from a recording's metadata to the tracker's types.
+//! From a recording's metadata (docs/recording.md) to the tracker's types: the stereo rig, the pen, the IMU scale.
+//! Replay and live tracking both start here.
 
-use fires_record::{CameraModel, Meta};
+use fires_record::Meta;
 use nalgebra::{Matrix3, Vector3};
 
-use crate::stereo::{CameraIntrinsics, Distortion, StereoRig};
+use crate::stereo::StereoRig;
 use crate::track::fusion::ImuScale;
 use crate::track::PenGeometry;
 
@@ -16,25 +17,6 @@ pub enum MetaError {
     /// The tracker is built for the four-LED pen.
     #[error("the pen has {0} LED(s); the tracker needs 4 (two-LED bars are measured separately)")]
     LedCount(usize),
-}
-
-/// The host camera model of a recorded camera.
-pub fn intrinsics(m: &CameraModel) -> CameraIntrinsics {
-    CameraIntrinsics {
-        width: m.width,
-        height: m.height,
-        fx: m.fx,
-        fy: m.fy,
-        cx: m.cx,
-        cy: m.cy,
-        distortion: Distortion {
-            k1: m.k1,
-            k2: m.k2,
-            p1: m.p1,
-            p2: m.p2,
-            k3: m.k3,
-        },
-    }
 }
 
 /// The stereo rig of a recording; camera 0 (left) defines the world frame.
@@ -53,12 +35,7 @@ pub fn stereo_rig(meta: &Meta) -> Result<StereoRig, MetaError> {
     );
     let r = rr * rl.transpose();
     let t = tr - r * tl;
-    Ok(StereoRig::new(
-        intrinsics(&left.intrinsics),
-        intrinsics(&right.intrinsics),
-        r,
-        t,
-    ))
+    Ok(StereoRig::new(left.intrinsics, right.intrinsics, r, t))
 }
 
 /// World -> left-camera transform of the recording (identity when camera 0 defines the world).

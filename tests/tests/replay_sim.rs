@@ -61,7 +61,7 @@ fn a_fires_v2_session_with_images_yields_strokes() {
         out.strokes.len(),
         strokes.len()
     );
-    assert!(out.strokes.iter().all(|s| s.polyline_m.len() >= 2));
+    assert!(out.strokes.iter().all(|s| s.len() >= 2));
     let truth = reader.exposure_truth().expect("truth").expect("simulated");
     assert_eq!(accuracy(&out, &truth).mislabels, 0);
     let _ = std::fs::remove_dir_all(&dir);

@@ -156,7 +156,7 @@ fn a_live_session_over_a_pty_records_a_replayable_recording() {
         summary.frames[0] > 5 && summary.frames[1] > 5,
         "{summary:?}"
     );
-    assert!(summary.link.sensor_frames > 100, "{summary:?}");
+    assert!(summary.link.stats.sensor_frames > 100, "{summary:?}");
     assert!(summary.seconds < 15.0, "stopped by the flag: {summary:?}");
 
     let written = RecordingReader::open(&rec).expect("the recording opens");
@@ -171,7 +171,7 @@ fn a_live_session_over_a_pty_records_a_replayable_recording() {
             .iter()
             .map(|c| c.bytes.len() as u64)
             .sum::<u64>(),
-        summary.link_bytes
+        summary.link.bytes
     );
     // The written recording has no ground truth: the replay gets the live run's world reference.
     let truth_world = ReplayConfig {
@@ -186,7 +186,7 @@ fn a_live_session_over_a_pty_records_a_replayable_recording() {
     // matches the replay of what it recorded (the only difference is the IMU time anchor, which live
     // tracking refines as packets arrive).
     assert_eq!(
-        summary.imu_samples, summary.link.sensor_frames,
+        summary.imu_samples, summary.link.stats.sensor_frames,
         "{summary:?}"
     );
     assert!(summary.samples_vision >= 5, "{summary:?}");

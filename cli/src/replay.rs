@@ -1,0 +1,129 @@
+//! `fires replay REC_DIR --out OUT_DIR`: a recording through the tracker; writes strokes.json, track.csv,
+//! report.json (with accuracy figures when the recording has ground truth) and then tip_error.png, the tip
+//! error over time of the vision-tracked samples (its scale is in report.json's `tip_error_plot`).
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use fires_host::replay::bar::bar_experiment;
+use fires_host::replay::plot::tip_error_png;
+use fires_host::replay::report::{replay_report, tip_errors};
+use fires_host::replay::{replay, ReplayConfig, WorldSource};
+use fires_host::track::fusion::FusionKind;
+use fires_record::report::TipErrorPlot;
+use fires_record::{RecordingReader, Report};
+
+use crate::output::{write_json, write_strokes, write_track_csv};
+
+/// Arguments of `fires replay`.
+#[derive(Debug, clap::Args)]
+pub struct ReplayArgs {
+    /// Recording directory (see docs/recording.md).
+    pub recording: PathBuf,
+    /// Output directory (created).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Sensor fusion of the pen direction.
+    #[arg(long, value_enum, default_value_t = Fusion::Orientation)]
+    pub fusion: Fusion,
+    /// World reference (gravity and magnetic field in the camera frame).
+    #[arg(long, value_enum, default_value_t = World::Estimate)]
+    pub world: World,
+}
+
+/// `--fusion`: which filter fuses the IMU with the vision axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Fusion {
+    /// Gyro/accelerometer/magnetometer orientation filter with vision corrections (the default).
+    Orientation,
+    /// The thesis's 4-state Kalman filter (FIRES thesis, eqs. 4.18-4.21).
+    Thesis,
+}
+
+impl Fusion {
+    /// The tracker's filter for this choice.
+    pub fn kind(self) -> FusionKind {
+        match self {
+            Fusion::Orientation => FusionKind::Orientation,
+            Fusion::Thesis => FusionKind::ThesisKalman,
+        }
+    }
+
+    /// The name used on the command line and in `report.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Fusion::Orientation => "orientation",
+            Fusion::Thesis => "thesis",
+        }
+    }
+}
+
+/// `--world`: where the world reference comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum World {
+    /// Estimated from the session, as a live run must (the default).
+    Estimate,
+    /// The recording's ground truth (a perfectly calibrated rig; simulated recordings only).
+    Truth,
+}
+
+impl World {
+    /// The replay's world source for this choice.
+    pub fn source(self) -> WorldSource {
+        match self {
+            World::Estimate => WorldSource::Estimate,
+            World::Truth => WorldSource::Truth,
+        }
+    }
+}
+
+/// Replays and writes the outputs; returns the report (used by `fires demo`).
+pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<Report> {
+    let reader = RecordingReader::open(&args.recording)
+        .with_context(|| format!("cannot open recording {}", args.recording.display()))?;
+    let mut config = ReplayConfig::default();
+    config.tracker.fusion = args.fusion.kind();
+    config.world = args.world.source();
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    if reader.meta().pen.led_positions_m.len() == 2 {
+        let bar = bar_experiment(&reader)
+            .with_context(|| format!("bar experiment of {}", args.recording.display()))?;
+        write_json(
+            &args.out.join("bar.json"),
+            &serde_json::json!({
+                "samples": bar.samples,
+                "single_frame_samples": bar.single_frame_samples,
+            }),
+        )?;
+        let report = Report::Bar(Box::new(bar.report));
+        write_json(&args.out.join("report.json"), &report)?;
+        return Ok(report);
+    }
+    let out = replay(&reader, &config)
+        .with_context(|| format!("replay of {}", args.recording.display()))?;
+    write_strokes(&args.out.join("strokes.json"), &out.strokes)?;
+    write_track_csv(&args.out.join("track.csv"), &out.samples, &out.display_tips)?;
+    let mut report = replay_report(&reader, &out, args.fusion.name())
+        .with_context(|| format!("report of {}", args.recording.display()))?;
+    if let Some(truth) = reader.exposure_truth()? {
+        let t0 = out.samples.first().map_or(0, |s| s.t_ns);
+        let points: Vec<(f64, f64)> = tip_errors(&out, &truth)
+            .into_iter()
+            .map(|(t, e)| (t.saturating_sub(t0) as f64 / 1e9, e * 1e3))
+            .collect();
+        let path = args.out.join("tip_error.png");
+        let scale = tip_error_png(&path, &points)?;
+        report.tip_error_plot = Some(TipErrorPlot { path, scale });
+    }
+    let report = Report::Replay(Box::new(report));
+    write_json(&args.out.join("report.json"), &report)?;
+    Ok(report)
+}
+
+/// `fires replay`: prints the report as one JSON line.
+pub fn run(args: &ReplayArgs) -> anyhow::Result<()> {
+    let report = replay_to_dir(args)?;
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(())
+}
