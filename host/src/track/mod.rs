@@ -24,6 +24,7 @@
 
 pub mod fusion;
 pub mod identify;
+pub mod line_fit;
 pub mod pen;
 pub mod pipeline;
 
