@@ -5,15 +5,16 @@
 //! One camera frame, top-down ([`Tracker::push_frame`] → `process_pair`):
 //! 1. *Pairing*: the other camera's latest frame is paired with it if close enough in time
 //!    (after the right-camera clock offset, configured plus estimated online,
-//!    [`clock_offset`]).
+//!    `pipeline/clock_offset.rs`).
 //! 2. *Points*: the other camera's blobs are moved to this frame's time with their image velocity
-//!    (the cameras are not synchronised, FIRES thesis, §4.1.3; [`align`]), then both are
+//!    (the cameras are not synchronised, FIRES thesis, §4.1.3; `pipeline/align.rs`), then both are
 //!    undistorted.
 //! 3. *Stereo*: epipolar and ray-gap gates and triangulation ([`crate::stereo::correspond`]).
 //! 4. *Identification* ([`super::identify`]) with the fused direction and the previous labels as
-//!    priors ([`prior`]).
-//! 5. *Safety*: the tracker's own checks of the labelling ([`safety`]).
-//! 6. *Tip* with eq. 4.13 ([`super::tip`]) along the vision axis or the fused axis.
+//!    priors (`pipeline/prior.rs`).
+//! 5. *Safety*: the tracker's own checks of the labelling, on the labelled pen's eq. 4.13 model
+//!    along the vision axis (`pipeline/safety.rs`).
+//! 6. *Tip* with eq. 4.13 ([`super::tip`]) along the fused axis or the vision axis.
 //! 7. *Fusion*: the vision axis corrects the direction filter at the frame time and may complete
 //!    the online world estimate; the tip filter smooths the tip.
 //!
