@@ -1,5 +1,6 @@
-//! Pen tracking after blob detection: LED identification (thesis §4.1.2), tip estimation
-//! (eqs. 4.11-4.13), sensor fusion (§4.1.4) and the per-frame [`pipeline::Tracker`].
+//! Pen tracking after blob detection (FIRES thesis, §4.1): LED identification (§4.1.2), tip
+//! estimation (eqs. 4.11-4.13), sensor fusion (§4.1.4) and the per-frame [`pipeline::Tracker`];
+//! the axis fit both identification and tip use is [`line_fit`].
 //!
 //! Feeding the tracker (timestamps in nanoseconds on one clock; right-camera clock offset in
 //! [`pipeline::TrackerConfig::right_clock_offset_ns`], refined online):
@@ -24,6 +25,7 @@
 
 pub mod fusion;
 pub mod identify;
+pub mod line_fit;
 pub mod pen;
 pub mod pipeline;
 

@@ -1,4 +1,4 @@
-//! Pen geometry (FIRES thesis, ch. 4, App. B and §4.1.2, eq. 4.11): four collinear LEDs at axial positions
+//! Pen geometry (FIRES thesis, §4.1.2, eq. 4.11 and Fig. 4.3): four collinear LEDs at axial positions
 //! `l = (0, d1, d1+d2, d1+d2+d3)` measured from LED 1 (nearest the tip) towards the back, and the
 //! tip `T` metres ahead of LED 1. In the pen frame +x points from the back towards the tip, so LED `i`
 //! sits at `x = -l_i` and the tip at `x = +T`.
@@ -15,8 +15,9 @@ pub enum PenError {
     /// LED offsets must start at 0 and increase strictly.
     #[error("LED offsets must be 0 followed by strictly increasing values")]
     NotIncreasing,
-    /// Two of the six pairwise LED distances differ by less than twice the matching tolerance
-    /// (a pen the distance test cannot identify): identification by distances would be ambiguous.
+    /// Two of the six pairwise LED distances differ by less than twice the matching tolerance:
+    /// identification by distances (FIRES thesis, §4.1.2, which needs all six to differ) would be
+    /// ambiguous.
     #[error("pairwise LED distances {0} m and {1} m are closer than twice the tolerance")]
     DistancesTooClose(f64, f64),
 }

@@ -186,7 +186,7 @@ fn bar_lengths_within_2mm_at_up_to_1m() {
         );
         assert!(e.len() > 5000 && p >= 0.9);
     }
-    // The three methods agree within 10% in RMS error (digest §7 criterion 4).
+    // The three triangulation methods (FIRES thesis, §4.1.1) agree within 10% in RMS error.
     assert!(
         rms.iter().fold(0.0f64, |a, b| a.max(*b))
             <= 1.1 * rms.iter().fold(f64::INFINITY, |a, b| a.min(*b))

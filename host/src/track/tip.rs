@@ -1,14 +1,15 @@
-//! Pen-tip estimation (thesis §4.1.2, eqs. 4.11-4.13; digest §2.3).
+//! Pen-tip estimation (FIRES thesis, §4.1.2, eqs. 4.11-4.13).
 //!
 //! For each of the 11 visibility patterns (`Σδ_i >= 2`) the scalar centroid
 //! `C = Σ l_i δ_i / Σ δ_i` (eq. 4.12) is precomputed. Per frame,
 //! `p_tip = C' + v_pen (C + T)` (eq. 4.13) with `C'` the 3D centroid of the identified LEDs and
 //! `v_pen` the unit pen direction towards the tip: the normalised difference for two LEDs, the
-//! least-squares (principal) axis for three or four, its sign fixed by the labels. A fused
-//! direction can replace `v_pen` ([`TipEstimator::estimate_with_direction`]).
+//! least-squares (principal) axis for three or four ([`super::line_fit`]), its sign fixed by the
+//! labels. A fused direction can replace `v_pen` ([`TipEstimator::estimate_with_direction`]).
 
+use super::line_fit::{labelled_direction, principal_axis};
 use super::pen::{PenGeometry, LED_COUNT};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use thiserror::Error;
 
 /// Why no tip could be computed.
@@ -75,7 +76,7 @@ impl TipEstimator {
         pts: &[Option<Vector3<f64>>; LED_COUNT],
     ) -> Result<TipEstimate, TipError> {
         let (mask, centroid) = centroid_of(pts)?;
-        let sign_ref = super::identify::labelled_direction(pts).ok_or(TipError::Degenerate)?;
+        let sign_ref = labelled_direction(pts).ok_or(TipError::Degenerate)?;
         let direction = if mask.count_ones() == 2 {
             sign_ref
         } else {
@@ -98,7 +99,7 @@ impl TipEstimator {
     ) -> Result<TipEstimate, TipError> {
         let (mask, centroid) = centroid_of(pts)?;
         let mut v = direction.try_normalize(1e-12).ok_or(TipError::Degenerate)?;
-        if let Some(s) = super::identify::labelled_direction(pts) {
+        if let Some(s) = labelled_direction(pts) {
             if v.dot(&s) < 0.0 {
                 v = -v;
             }
@@ -140,25 +141,6 @@ fn centroid_of(pts: &[Option<Vector3<f64>>; LED_COUNT]) -> Result<(u8, Vector3<f
         return Err(TipError::TooFewLeds);
     }
     Ok((mask, sum / f64::from(n)))
-}
-
-/// Unit principal axis (direction of the least-squares line) of the points about `centroid`,
-/// by power iteration on the 3x3 scatter matrix started from the labelled end-to-end direction
-/// (converges in a few steps because nearly collinear points have a dominant eigenvalue).
-pub fn principal_axis(
-    pts: &[Option<Vector3<f64>>; LED_COUNT],
-    centroid: &Vector3<f64>,
-) -> Option<Vector3<f64>> {
-    let mut scatter = Matrix3::zeros();
-    for p in pts.iter().flatten() {
-        let d = p - centroid;
-        scatter += d * d.transpose();
-    }
-    let mut v = super::identify::labelled_direction(pts)?;
-    for _ in 0..8 {
-        v = (scatter * v).try_normalize(1e-300)?;
-    }
-    Some(v)
 }
 
 #[cfg(test)]

@@ -1,0 +1,464 @@
+//! Time alignment of the two cameras. They are not synchronised ("pairs of image points on the two
+//! cameras are never captured in the same time instant", FIRES thesis, §4.1.3), so before a pair
+//! is triangulated the other camera's blobs are moved to this frame's time with their image
+//! velocity. [`TimeAlignment`] keeps each camera's last two frames (with the blob index of every
+//! LED once a vision sample labelled them) and the last two vision poses of the pen, which predict
+//! where the LEDs image in frames no vision sample labelled. Times are on the left camera's clock
+//! (docs/architecture.md §3).
+
+use super::TrackerConfig;
+use crate::stereo::{CameraId, CameraModel, StereoRig};
+use crate::track::pen::LED_COUNT;
+use nalgebra::Vector3;
+
+/// One camera frame kept for time alignment: time, blob centres and, once a vision sample labelled
+/// it, the blob index of every LED.
+#[derive(Debug, Clone, Default)]
+pub(super) struct KeptFrame {
+    /// Exposure time on the left camera's clock, nanoseconds.
+    pub(super) t_ns: u64,
+    /// Blob centres, distorted pixels.
+    pub(super) blobs: Vec<[f64; 2]>,
+    /// Blob index of each LED (index 0 = LED 1), once labelled.
+    pub(super) labels: [Option<usize>; LED_COUNT],
+}
+
+/// The current and the previous frame of one camera.
+#[derive(Debug, Clone, Default)]
+pub(super) struct CameraHistory {
+    /// The newest frame.
+    pub(super) current: Option<KeptFrame>,
+    /// The frame before it.
+    pub(super) previous: Option<KeptFrame>,
+}
+
+impl CameraHistory {
+    /// Makes a new frame the current one.
+    pub(super) fn push(&mut self, t_ns: u64, blobs: Vec<[f64; 2]>) {
+        self.previous = self.current.take();
+        self.current = Some(KeptFrame {
+            t_ns,
+            blobs,
+            labels: [None; LED_COUNT],
+        });
+    }
+
+    /// Records which blob of the current frame is which LED.
+    pub(super) fn label_current(&mut self, labels: [Option<usize>; LED_COUNT]) {
+        if let Some(f) = &mut self.current {
+            f.labels = labels;
+        }
+    }
+}
+
+/// What the alignment needs from the configuration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct AlignOptions {
+    /// Move the other camera's blobs to the frame time ([`TrackerConfig::time_align`]).
+    pub(super) time_align: bool,
+    /// A vision pose predicts the LEDs for this long, nanoseconds.
+    pub(super) continuity_ns: u64,
+    /// Largest image motion between consecutive frames used for velocity, pixels.
+    pub(super) max_blob_motion_px: f64,
+}
+
+impl AlignOptions {
+    /// The options of a tracker configuration.
+    pub(super) fn from_config(config: &TrackerConfig) -> Self {
+        Self {
+            time_align: config.time_align,
+            continuity_ns: config.continuity_ns,
+            max_blob_motion_px: config.max_blob_motion_px,
+        }
+    }
+}
+
+/// The points of one stereo pair, reused from frame to frame: the other camera's blobs moved to
+/// the pair's time and both cameras' blobs undistorted (normalised coordinates, indexed as the
+/// frames' blobs).
+#[derive(Debug, Clone, Default)]
+pub(super) struct PairPoints {
+    /// Camera of the frame that completed the pair (0 left, 1 right).
+    pub(super) this: usize,
+    /// The other camera's current blobs moved to the pair's time, pixels.
+    pub(super) aligned: Vec<[f64; 2]>,
+    /// Image velocity of each of those blobs, pixels per nanosecond (None: not moved).
+    pub(super) aligned_velocity: Vec<Option<[f64; 2]>>,
+    /// Undistorted left points.
+    pub(super) left_norm: Vec<[f64; 2]>,
+    /// Undistorted right points.
+    pub(super) right_norm: Vec<[f64; 2]>,
+}
+
+impl PairPoints {
+    /// The pixel blobs of `camera` as the pair uses them: the newest frame's own blobs for the
+    /// camera that completed the pair, the aligned blobs for the other one.
+    pub(super) fn pixels<'a>(
+        &'a self,
+        align: &'a TimeAlignment,
+        camera: CameraId,
+    ) -> &'a [[f64; 2]] {
+        let cam = usize::from(camera == CameraId::Right);
+        if cam == self.this {
+            align.cameras[cam]
+                .current
+                .as_ref()
+                .map_or(&[], |f| f.blobs.as_slice())
+        } else {
+            &self.aligned
+        }
+    }
+}
+
+/// Camera histories and recent pen poses: pairs frames across cameras and moves blobs in time.
+#[derive(Debug, Clone)]
+pub(super) struct TimeAlignment {
+    options: AlignOptions,
+    cameras: [CameraHistory; 2],
+    /// All four LED positions of the newest and the one older vision pose, for predicting where
+    /// the LEDs appear in a frame that no vision sample labelled.
+    pen_history: [Option<(u64, [Vector3<f64>; LED_COUNT])>; 2],
+}
+
+impl TimeAlignment {
+    /// Empty histories.
+    pub(super) fn new(options: AlignOptions) -> Self {
+        Self {
+            options,
+            cameras: Default::default(),
+            pen_history: [None; 2],
+        }
+    }
+
+    /// Keeps a new frame of camera `cam` (0 left, 1 right) at `t_ns` (left clock).
+    pub(super) fn push(&mut self, cam: usize, t_ns: u64, blobs: Vec<[f64; 2]>) {
+        self.cameras[cam].push(t_ns, blobs);
+    }
+
+    /// The newest frame of camera `cam`.
+    pub(super) fn current(&self, cam: usize) -> Option<&KeptFrame> {
+        self.cameras[cam].current.as_ref()
+    }
+
+    /// Records which blob of each camera's current frame is which LED (`this` is the camera that
+    /// completed the pair).
+    pub(super) fn label(
+        &mut self,
+        this: usize,
+        own: [Option<usize>; LED_COUNT],
+        other: [Option<usize>; LED_COUNT],
+    ) {
+        self.cameras[this].label_current(own);
+        self.cameras[1 - this].label_current(other);
+    }
+
+    /// Keeps a vision pose (all four LED positions at `t_ns`) for predicting the LED images.
+    pub(super) fn remember_pose(&mut self, t_ns: u64, leds: [Vector3<f64>; LED_COUNT]) {
+        self.pen_history = [Some((t_ns, leds)), self.pen_history[0]];
+    }
+
+    /// Fills `points` for the newest frame of `this` at `t`: the other camera's latest frame
+    /// moved to `t` (when time alignment is on), then both undistorted.
+    pub(super) fn prepare(&self, rig: &StereoRig, this: usize, t: u64, points: &mut PairPoints) {
+        let other = 1 - this;
+        points.this = this;
+        points.aligned.clear();
+        points.aligned_velocity.clear();
+        if let Some(cur) = &self.cameras[other].current {
+            points.aligned.extend_from_slice(&cur.blobs);
+            points.aligned_velocity.resize(cur.blobs.len(), None);
+        }
+        if self.options.time_align {
+            for (i, moved, v) in self.alignment(rig, other, t) {
+                points.aligned[i] = moved;
+                points.aligned_velocity[i] = Some(v);
+            }
+        }
+        let own: &[[f64; 2]] = self.cameras[this]
+            .current
+            .as_ref()
+            .map_or(&[], |f| f.blobs.as_slice());
+        let (l_px, r_px): (&[[f64; 2]], &[[f64; 2]]) = if this == 0 {
+            (own, &points.aligned)
+        } else {
+            (&points.aligned, own)
+        };
+        undistort_all(&rig.left, l_px, &mut points.left_norm);
+        undistort_all(&rig.right, r_px, &mut points.right_norm);
+    }
+
+    /// Where the other camera's current blobs would be at `t`: (blob index, moved position,
+    /// image velocity in pixels per nanosecond) for every blob whose LED is known. The velocity is
+    /// measured between the same LED's blobs in the previous and current frame of that camera;
+    /// without a previous blob it is the predicted pen motion projected into the image.
+    ///
+    /// Blobs are matched by LED identity (labels of earlier vision samples, or the predicted LED
+    /// images), never by nearest neighbour: at 15-30 frames/s a fast pen moves about one LED
+    /// spacing per frame, a nearest-neighbour velocity then aliases to the neighbouring LED, and
+    /// the whole pen shifts by one LED into a consistent but wrongly labelled configuration.
+    pub(super) fn alignment(
+        &self,
+        rig: &StereoRig,
+        other: usize,
+        t: u64,
+    ) -> Vec<(usize, [f64; 2], [f64; 2])> {
+        let history = &self.cameras[other];
+        let Some(cur) = &history.current else {
+            return Vec::new();
+        };
+        let camera = if other == 0 {
+            CameraId::Left
+        } else {
+            CameraId::Right
+        };
+        let cur_ids = self.frame_identities(rig, camera, cur);
+        let prev = history
+            .previous
+            .as_ref()
+            .filter(|p| p.t_ns < cur.t_ns && cur.t_ns - p.t_ns <= 100_000_000);
+        let prev_ids = prev.map(|p| self.frame_identities(rig, camera, p));
+        let shift = t as f64 - cur.t_ns as f64;
+        // Predicted LEDs at the other frame's time and at this one, computed once per frame.
+        let (at_frame, at_target) = (self.predicted_leds(cur.t_ns), self.predicted_leds(t));
+        let project =
+            |leds: Option<[Vector3<f64>; LED_COUNT]>, k: usize| rig.project(camera, &leds?[k]).ok();
+        let mut out = Vec::new();
+        for (k, id) in cur_ids.iter().enumerate() {
+            let Some(i) = *id else { continue };
+            let b = cur.blobs[i];
+            let measured = prev.zip(prev_ids).and_then(|(p, ids)| {
+                let q = p.blobs[ids[k]?];
+                let dt = (cur.t_ns - p.t_ns) as f64;
+                ((b[0] - q[0]).hypot(b[1] - q[1]) <= self.options.max_blob_motion_px)
+                    .then(|| [(b[0] - q[0]) / dt, (b[1] - q[1]) / dt])
+            });
+            let v = measured.or_else(|| {
+                let (a, c) = (project(at_frame, k)?, project(at_target, k)?);
+                (shift != 0.0).then(|| [(c[0] - a[0]) / shift, (c[1] - a[1]) / shift])
+            });
+            if let Some(v) = v {
+                out.push((i, [b[0] + v[0] * shift, b[1] + v[1] * shift], v));
+            }
+        }
+        out
+    }
+
+    /// Blob index of every LED in a frame: its labels when a vision sample labelled it, otherwise
+    /// the blob nearest each predicted LED image, accepted only when it is unambiguous (within a
+    /// third of the smallest predicted LED spacing, and alone there).
+    pub(super) fn frame_identities(
+        &self,
+        rig: &StereoRig,
+        camera: CameraId,
+        frame: &KeptFrame,
+    ) -> [Option<usize>; LED_COUNT] {
+        if frame.labels.iter().any(Option::is_some) {
+            return frame.labels;
+        }
+        let mut ids = [None; LED_COUNT];
+        let Some(px) = self.predicted_images(rig, camera, frame.t_ns) else {
+            return ids;
+        };
+        let mut spacing = self.options.max_blob_motion_px;
+        for (a, pa) in px.iter().enumerate() {
+            for pb in &px[a + 1..] {
+                spacing = spacing.min((pa[0] - pb[0]).hypot(pa[1] - pb[1]));
+            }
+        }
+        let gate = spacing / 3.0;
+        for (k, p) in px.iter().enumerate() {
+            let mut near = frame
+                .blobs
+                .iter()
+                .enumerate()
+                .filter(|(_, b)| (b[0] - p[0]).hypot(b[1] - p[1]) <= gate);
+            if let (Some((i, _)), None) = (near.next(), near.next()) {
+                ids[k] = Some(i);
+            }
+        }
+        ids
+    }
+
+    /// The images of the four LEDs in `camera` at `t` predicted by [`Self::predicted_leds`], or
+    /// None without a prediction or when an LED does not project.
+    pub(super) fn predicted_images(
+        &self,
+        rig: &StereoRig,
+        camera: CameraId,
+        t: u64,
+    ) -> Option<Vec<[f64; 2]>> {
+        self.predicted_leds(t)?
+            .iter()
+            .map(|p| rig.project(camera, p))
+            .collect::<Result<Vec<_>, _>>()
+            .ok()
+    }
+
+    /// All four LED positions at `t` from the last two vision poses (constant velocity), or None
+    /// without a recent pose.
+    pub(super) fn predicted_leds(&self, t: u64) -> Option<[Vector3<f64>; LED_COUNT]> {
+        let (t1, p1) = self.pen_history[0]?;
+        if t.abs_diff(t1) > self.options.continuity_ns {
+            return None;
+        }
+        let dt = (t as f64 - t1 as f64) * 1e-9;
+        let velocity = |k: usize| match self.pen_history[1] {
+            Some((t0, p0)) if t1 > t0 && t1 - t0 <= 100_000_000 => {
+                (p1[k] - p0[k]) / ((t1 - t0) as f64 * 1e-9)
+            }
+            _ => Vector3::zeros(),
+        };
+        Some(std::array::from_fn(|k| p1[k] + velocity(k) * dt))
+    }
+}
+
+/// Undistorts every blob into `out`, index for index.
+fn undistort_all(cam: &CameraModel, px: &[[f64; 2]], out: &mut Vec<[f64; 2]>) {
+    out.clear();
+    // A blob that cannot be undistorted is replaced by a NaN point, which the triangulation
+    // rejects, so blob indices stay aligned with the frame.
+    out.extend(
+        px.iter()
+            .map(|p| cam.undistort(*p).unwrap_or([f64::NAN, f64::NAN])),
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::track::pen::PenGeometry;
+
+    const OPTIONS: AlignOptions = AlignOptions {
+        time_align: true,
+        continuity_ns: 100_000_000,
+        max_blob_motion_px: 40.0,
+    };
+
+    fn rig() -> StereoRig {
+        StereoRig::parallel(1024, 768, 45f64.to_radians(), 0.25)
+    }
+
+    /// The thesis pen with LED 1 at `led1`, lying along x (tip towards +x).
+    fn pen_at(led1: Vector3<f64>) -> [Vector3<f64>; LED_COUNT] {
+        PenGeometry::thesis()
+            .led_offsets
+            .map(|l| led1 - Vector3::x() * l)
+    }
+
+    #[test]
+    fn a_camera_keeps_its_last_two_frames_and_labels_the_newest() {
+        let mut h = CameraHistory::default();
+        h.push(1, vec![[1.0, 2.0]]);
+        h.label_current([Some(0), None, None, None]);
+        h.push(2, vec![[3.0, 4.0]]);
+        let (cur, prev) = (h.current.as_ref().unwrap(), h.previous.as_ref().unwrap());
+        assert_eq!((cur.t_ns, prev.t_ns), (2, 1));
+        assert_eq!(prev.labels[0], Some(0));
+        assert_eq!(cur.labels, [None; LED_COUNT]);
+    }
+
+    /// Two poses 10 ms apart moving at 0.5 m/s: the prediction extrapolates linearly, and is
+    /// refused beyond the continuity time.
+    #[test]
+    fn predicted_leds_extrapolate_at_constant_velocity() {
+        let mut a = TimeAlignment::new(OPTIONS);
+        assert!(a.predicted_leds(0).is_none());
+        let v = Vector3::new(0.5, -0.2, 0.1);
+        let p0 = Vector3::new(0.0, 0.0, 0.8);
+        a.remember_pose(100_000_000, pen_at(p0));
+        // One pose: no velocity yet, the pen stands still.
+        assert!((a.predicted_leds(120_000_000).unwrap()[0] - p0).norm() < 1e-15);
+        a.remember_pose(110_000_000, pen_at(p0 + v * 0.01));
+        let p = a.predicted_leds(130_000_000).unwrap();
+        for (k, q) in pen_at(p0 + v * 0.03).iter().enumerate() {
+            assert!((p[k] - q).norm() < 1e-12, "{k}");
+        }
+        assert!(a
+            .predicted_leds(110_000_000 + OPTIONS.continuity_ns + 1)
+            .is_none());
+    }
+
+    /// A labelled frame keeps its labels; an unlabelled one takes the blob at each predicted LED
+    /// image, except where two blobs are equally close candidates.
+    #[test]
+    fn frame_identities_come_from_labels_or_unambiguous_predictions() {
+        let rig = rig();
+        let mut a = TimeAlignment::new(OPTIONS);
+        let leds = pen_at(Vector3::new(0.05, 0.0, 0.8));
+        a.remember_pose(0, leds);
+        let px: Vec<[f64; 2]> = leds
+            .iter()
+            .map(|p| rig.project(CameraId::Left, p).unwrap())
+            .collect();
+        // Reversed order, slightly off the prediction.
+        let blobs: Vec<[f64; 2]> = px.iter().rev().map(|p| [p[0] + 0.3, p[1] - 0.2]).collect();
+        let frame = KeptFrame {
+            t_ns: 0,
+            blobs: blobs.clone(),
+            labels: [None; LED_COUNT],
+        };
+        assert_eq!(
+            a.frame_identities(&rig, CameraId::Left, &frame),
+            [Some(3), Some(2), Some(1), Some(0)]
+        );
+        let labelled = KeptFrame {
+            labels: [Some(1), None, None, None],
+            ..frame.clone()
+        };
+        assert_eq!(
+            a.frame_identities(&rig, CameraId::Left, &labelled),
+            labelled.labels
+        );
+        // A second blob next to LED 1's image: LED 1 is no longer identified.
+        let mut crowded = frame;
+        crowded.blobs.push([px[0][0] - 0.3, px[0][1]]);
+        let ids = a.frame_identities(&rig, CameraId::Left, &crowded);
+        assert_eq!(ids, [None, Some(2), Some(1), Some(0)]);
+    }
+
+    /// Blobs moving at constant image velocity are moved exactly to the target time, using the
+    /// velocity between the labelled previous and current frame.
+    #[test]
+    fn labelled_blobs_move_with_their_measured_velocity() {
+        let rig = rig();
+        let mut a = TimeAlignment::new(OPTIONS);
+        let v = [2.0e-7, -1.0e-7]; // pixels per nanosecond (200 and -100 px/s)
+        let start = [[400.0, 300.0], [430.0, 310.0], [450.0, 315.0]];
+        let at = |t: u64| -> Vec<[f64; 2]> {
+            start
+                .iter()
+                .map(|b| [b[0] + v[0] * t as f64, b[1] + v[1] * t as f64])
+                .collect()
+        };
+        a.push(1, 10_000_000, at(10_000_000));
+        a.label(1, [Some(0), Some(1), None, Some(2)], [None; LED_COUNT]);
+        a.push(1, 26_000_000, at(26_000_000));
+        a.label(1, [Some(0), Some(1), None, Some(2)], [None; LED_COUNT]);
+        let moved = a.alignment(&rig, 1, 33_000_000);
+        assert_eq!(moved.len(), 3);
+        let want = at(33_000_000);
+        for (i, p, vel) in moved {
+            assert!((p[0] - want[i][0]).abs() < 1e-9 && (p[1] - want[i][1]).abs() < 1e-9);
+            assert!((vel[0] - v[0]).abs() < 1e-15 && (vel[1] - v[1]).abs() < 1e-15);
+        }
+        // Filling a pair: the left frame's own blobs stay, the right ones are the moved ones.
+        a.push(0, 33_000_000, vec![[500.0, 300.0]]);
+        let mut points = PairPoints::default();
+        a.prepare(&rig, 0, 33_000_000, &mut points);
+        assert_eq!(points.pixels(&a, CameraId::Left), &[[500.0, 300.0]]);
+        assert_eq!(points.pixels(&a, CameraId::Right).len(), 3);
+        assert!((points.pixels(&a, CameraId::Right)[2][0] - want[2][0]).abs() < 1e-9);
+        assert_eq!((points.left_norm.len(), points.right_norm.len()), (1, 3));
+        // Without time alignment the blobs stay where they were imaged.
+        let still = TimeAlignment {
+            options: AlignOptions {
+                time_align: false,
+                ..OPTIONS
+            },
+            ..a.clone()
+        };
+        still.prepare(&rig, 0, 33_000_000, &mut points);
+        assert_eq!(points.aligned, at(26_000_000));
+        assert!(points.aligned_velocity.iter().all(Option::is_none));
+    }
+}

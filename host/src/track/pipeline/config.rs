@@ -1,0 +1,123 @@
+//! The tracker's configuration ([`TrackerConfig`]) and the choice of pen axis for the tip
+//! ([`DirectionSource`]).
+
+use crate::stereo::{CorrespondenceConfig, TriangulationMethod};
+use crate::track::fusion::{
+    DeadReckonConfig, FusionKind, MagCalibrationConfig, OrientationConfig, ThesisKalmanConfig,
+    TipFilterConfig, WorldEstimateConfig, WorldReference,
+};
+use crate::track::identify::IdentifyConfig;
+use crate::track::pen::PenGeometry;
+
+/// Which axis eq. 4.13 uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+pub enum DirectionSource {
+    /// The least-squares axis of the identified LEDs (the thesis's eq. 4.13 as printed).
+    Vision,
+    /// The fused direction when the filter has seen vision recently, else the vision axis.
+    #[default]
+    Fused,
+}
+
+/// Everything the tracker needs to know.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TrackerConfig {
+    /// Pen LED layout and tip offset.
+    pub pen: PenGeometry,
+    /// Triangulation method (eqs. 4.1-4.10).
+    pub method: TriangulationMethod,
+    /// Stereo gates.
+    pub correspondence: CorrespondenceConfig,
+    /// Identification tolerances.
+    pub identify: IdentifyConfig,
+    /// Direction filter.
+    pub fusion: FusionKind,
+    /// Gains of the default filter.
+    pub orientation: OrientationConfig,
+    /// Noise of the thesis filter.
+    pub thesis_kalman: ThesisKalmanConfig,
+    /// Gravity and magnetic directions in the world (left camera) frame; `None` (the default):
+    /// estimated during the session ([`crate::track::fusion::world_estimate`]), and until then the
+    /// fusion gives no prior, no fused axis and no inertial dead reckoning.
+    pub world: Option<WorldReference>,
+    /// When the online world estimate is accepted.
+    pub world_estimate: WorldEstimateConfig,
+    /// Online hard-iron calibration of the magnetometer.
+    pub mag_calibration: MagCalibrationConfig,
+    /// Occlusion handling.
+    pub dead_reckon: DeadReckonConfig,
+    /// Tip position filter (constant velocity + IMU acceleration).
+    pub tip_filter: TipFilterConfig,
+    /// Position of the tip relative to the IMU in the pen frame, metres (lever arm for the
+    /// tip filter's acceleration input).
+    pub imu_to_tip: [f64; 3],
+    /// Axis used for the tip.
+    pub direction_source: DirectionSource,
+    /// Frames of the two cameras further apart than this are not paired, nanoseconds.
+    pub max_pair_dt_ns: u64,
+    /// Added to right-camera timestamps to express them on the left camera's clock, nanoseconds.
+    pub right_clock_offset_ns: i64,
+    /// Move the other camera's blobs to the frame time using their image velocity.
+    pub time_align: bool,
+    /// A labelling is refused when two of the pen's LEDs image closer than this in either camera,
+    /// pixels: the spots overlap (pen pointing at a camera), so which blob is which LED is a guess.
+    pub min_image_separation_px: f64,
+    /// Estimate the residual right-camera clock offset online from the epipolar residuals of
+    /// moving labelled LEDs (needs `time_align`), and add it to `right_clock_offset_ns`.
+    pub estimate_clock_offset: bool,
+    /// Fastest pen motion expected, metres per second: with the time between a pair's two
+    /// exposures it bounds the triangulation's scale error (`1 + v Δt / baseline`), which decides
+    /// whether two three-LED patterns that differ only in scale can be confused.
+    pub max_pen_speed_mps: f64,
+    /// Labelled frames per clock-offset update.
+    pub clock_window: usize,
+    /// Required precision of one clock-offset update, nanoseconds (else the window is discarded).
+    pub clock_precision_ns: f64,
+    /// Largest image motion between consecutive frames of one camera used for velocity, pixels.
+    pub max_blob_motion_px: f64,
+    /// Previous labels serve as a prior for this long, nanoseconds.
+    pub continuity_ns: u64,
+    /// The fused direction counts as vision-corrected for this long, nanoseconds.
+    pub fused_fresh_ns: u64,
+    /// After that, the filter's direction still serves identification as a prior whose
+    /// expected error grows by this much per second (gyro drift against the gravity and
+    /// heading corrections), radians per second...
+    pub stale_prior_growth: f64,
+    /// ...up to this error, radians (the IMU-only orientation's error bound with a calibrated
+    /// world reference); a value of 0 disables the stale prior.
+    pub stale_prior_max: f64,
+}
+
+impl Default for TrackerConfig {
+    fn default() -> Self {
+        Self {
+            pen: PenGeometry::thesis(),
+            method: TriangulationMethod::Midpoint,
+            correspondence: CorrespondenceConfig::default(),
+            identify: IdentifyConfig::default(),
+            fusion: FusionKind::Orientation,
+            orientation: OrientationConfig::default(),
+            thesis_kalman: ThesisKalmanConfig::default(),
+            world: None,
+            world_estimate: WorldEstimateConfig::default(),
+            mag_calibration: MagCalibrationConfig::default(),
+            dead_reckon: DeadReckonConfig::default(),
+            tip_filter: TipFilterConfig::default(),
+            imu_to_tip: [0.0; 3],
+            direction_source: DirectionSource::Fused,
+            max_pair_dt_ns: 40_000_000,
+            right_clock_offset_ns: 0,
+            time_align: true,
+            min_image_separation_px: 4.0,
+            max_pen_speed_mps: 1.5,
+            estimate_clock_offset: true,
+            clock_window: 30,
+            clock_precision_ns: 1_000_000.0,
+            max_blob_motion_px: 40.0,
+            continuity_ns: 100_000_000,
+            fused_fresh_ns: 200_000_000,
+            stale_prior_growth: 0.05,
+            stale_prior_max: 0.07,
+        }
+    }
+}

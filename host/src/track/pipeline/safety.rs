@@ -1,0 +1,338 @@
+//! Labelling safety: the tracker's checks of an identification beyond the identifier's own, from
+//! what only the tracker knows (the prior's age, the pen's recent motion, the images), and its
+//! memory of the labels it accepted (the continuity prior of the next frames, FIRES thesis,
+//! §4.1.2, and the poses and blob labels that time alignment uses).
+
+use super::align::{PairPoints, TimeAlignment};
+use super::TrackerConfig;
+use crate::stereo::{CameraId, Candidate, StereoRig};
+use crate::track::identify::Identification;
+use crate::track::pen::LED_COUNT;
+use crate::track::tip::{TipEstimate, TipEstimator};
+use nalgebra::Vector3;
+
+/// Everything one pair's checks look at, borrowed from the tracker.
+pub(super) struct PairView<'a> {
+    /// The rig.
+    pub(super) rig: &'a StereoRig,
+    /// Camera histories and pose predictions.
+    pub(super) align: &'a TimeAlignment,
+    /// The pair's (aligned) points.
+    pub(super) points: &'a PairPoints,
+    /// The pair's stereo candidates.
+    pub(super) candidates: &'a [Candidate],
+    /// The tip estimator (pattern centroids).
+    pub(super) tip: &'a TipEstimator,
+    /// The pair's time, left clock, nanoseconds.
+    pub(super) t: u64,
+}
+
+/// Accepted labels and the checks a new labelling must pass.
+#[derive(Debug, Clone)]
+pub(super) struct LabelGuard {
+    led_offsets: [f64; LED_COUNT],
+    min_image_separation_px: f64,
+    continuity_ns: u64,
+    /// Time and positions of the LEDs labelled last.
+    previous_leds: (u64, [Option<Vector3<f64>>; LED_COUNT]),
+}
+
+impl LabelGuard {
+    /// No labels yet.
+    pub(super) fn new(config: &TrackerConfig) -> Self {
+        Self {
+            led_offsets: config.pen.led_offsets,
+            min_image_separation_px: config.min_image_separation_px,
+            continuity_ns: config.continuity_ns,
+            previous_leds: (0, [None; LED_COUNT]),
+        }
+    }
+
+    /// The LEDs labelled last, if within `continuity_ns` of `t`.
+    pub(super) fn recent_leds(&self, t: u64) -> Option<&[Option<Vector3<f64>>; LED_COUNT]> {
+        let (t_prev, leds) = &self.previous_leds;
+        (t.saturating_sub(*t_prev) <= self.continuity_ns).then_some(leds)
+    }
+
+    /// True when the labelling may be reported. Two LEDs are one distance: with only a stale
+    /// direction to check it, a wrong stereo pair at that distance would pass; and a pair
+    /// shifted by one LED in one image (LED images a few pixels apart when the pen points at a
+    /// camera or turns fast) also fits. So two LEDs need the fused direction and temporal
+    /// continuity (FIRES thesis, §4.1.2), i.e. must sit where the pen's recent motion predicts
+    /// them. Any labelling needs well separated LED images and isolated labelled blobs.
+    pub(super) fn is_safe(
+        &self,
+        pair: &PairView<'_>,
+        id: &Identification,
+        vision: &TipEstimate,
+        stale_prior: bool,
+    ) -> bool {
+        if id.count() < 3 && (stale_prior || !self.labels_match_prediction(pair, id)) {
+            return false;
+        }
+        self.pen_images_separated(pair, vision) && self.labelled_blobs_isolated(pair, id)
+    }
+
+    /// True when no other blob lies within `min_image_separation_px` of a labelled blob, in
+    /// either camera's frame.
+    pub(super) fn labelled_blobs_isolated(&self, pair: &PairView<'_>, id: &Identification) -> bool {
+        let min2 = self.min_image_separation_px.powi(2);
+        let isolated = |cam: usize, b: usize| {
+            let Some(frame) = pair.align.current(cam) else {
+                return true;
+            };
+            let Some(p) = frame.blobs.get(b) else {
+                return true;
+            };
+            frame
+                .blobs
+                .iter()
+                .enumerate()
+                .all(|(j, q)| j == b || (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) >= min2)
+        };
+        id.assignment
+            .iter()
+            .flatten()
+            .filter_map(|&c| pair.candidates.get(c))
+            .all(|c| isolated(0, c.left) && isolated(1, c.right))
+    }
+
+    /// True when the images of every two of the pen's four LEDs (the labelled pen's model,
+    /// unlabelled LEDs included) are at least `min_image_separation_px` apart in both cameras.
+    pub(super) fn pen_images_separated(&self, pair: &PairView<'_>, pen: &TipEstimate) -> bool {
+        let Some(c) = pair.tip.pattern_centroid(pen.pattern) else {
+            return false;
+        };
+        let leds = self
+            .led_offsets
+            .map(|l| pen.centroid + pen.direction * (c - l));
+        let min2 = self.min_image_separation_px.powi(2);
+        [CameraId::Left, CameraId::Right].iter().all(|&camera| {
+            let px: Vec<[f64; 2]> = leds
+                .iter()
+                .filter_map(|p| pair.rig.project(camera, p).ok())
+                .collect();
+            px.iter().enumerate().all(|(i, a)| {
+                px[i + 1..]
+                    .iter()
+                    .all(|b| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) >= min2)
+            })
+        })
+    }
+
+    /// True when the predicted LED images (constant-velocity pen motion) put every labelled blob
+    /// nearest its own LED's predicted image, in both cameras (the other camera's blobs moved to
+    /// the pair's time); false without a prediction.
+    pub(super) fn labels_match_prediction(&self, pair: &PairView<'_>, id: &Identification) -> bool {
+        let cands = pair.candidates;
+        for camera in [CameraId::Left, CameraId::Right] {
+            let blobs = pair.points.pixels(pair.align, camera);
+            let Some(px) = pair.align.predicted_images(pair.rig, camera, pair.t) else {
+                return false;
+            };
+            for (k, c) in id.assignment.iter().enumerate() {
+                let Some(c) = c.and_then(|c| cands.get(c)) else {
+                    continue;
+                };
+                let blob = if camera == CameraId::Left {
+                    c.left
+                } else {
+                    c.right
+                };
+                let Some(b) = blobs.get(blob) else { continue };
+                let d2 = |p: &[f64; 2]| (p[0] - b[0]).powi(2) + (p[1] - b[1]).powi(2);
+                let nearest = (0..LED_COUNT).min_by(|&i, &j| d2(&px[i]).total_cmp(&d2(&px[j])));
+                if nearest != Some(k) {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// Keeps a labelled frame for the next frames: the LEDs for continuity, the whole pen for
+    /// predicting LED images, and each camera's blob labels for time alignment.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn remember(
+        &mut self,
+        align: &mut TimeAlignment,
+        tip: &TipEstimator,
+        candidates: &[Candidate],
+        this: usize,
+        t: u64,
+        id: &Identification,
+        estimate: &TipEstimate,
+    ) {
+        self.previous_leds = (t, id.points);
+        if let Some(c) = tip.pattern_centroid(estimate.pattern) {
+            let l = self.led_offsets;
+            let all = l.map(|lk| estimate.centroid + estimate.direction * (c - lk));
+            align.remember_pose(t, all);
+        }
+        let side = |left: bool| {
+            id.assignment.map(|a| {
+                a.map(|k| {
+                    if left {
+                        candidates[k].left
+                    } else {
+                        candidates[k].right
+                    }
+                })
+            })
+        };
+        align.label(this, side(this == 0), side(this != 0));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::align::AlignOptions;
+    use super::*;
+    use crate::track::identify::Resolution;
+    use crate::track::pen::PenGeometry;
+
+    fn rig() -> StereoRig {
+        StereoRig::parallel(1024, 768, 45f64.to_radians(), 0.25)
+    }
+
+    /// The thesis pen with LED 1 at `led1`, pointing along `dir` (towards the tip).
+    fn pen(led1: Vector3<f64>, dir: Vector3<f64>) -> [Vector3<f64>; LED_COUNT] {
+        PenGeometry::thesis().led_offsets.map(|l| led1 - dir * l)
+    }
+
+    fn labelled(n: usize) -> Identification {
+        Identification {
+            assignment: std::array::from_fn(|k| (k < n).then_some(k)),
+            points: [None; LED_COUNT],
+            distance_rms: 0.0,
+            confidence: 1.0,
+            resolution: Resolution::Geometry,
+            interference: 0,
+        }
+    }
+
+    /// A pen imaged in both cameras at `t`, with candidate k = LED k (blob k in both images).
+    struct Scene {
+        rig: StereoRig,
+        align: TimeAlignment,
+        points: PairPoints,
+        candidates: Vec<Candidate>,
+        tip: TipEstimator,
+        leds: [Vector3<f64>; LED_COUNT],
+    }
+
+    impl Scene {
+        fn new(leds: [Vector3<f64>; LED_COUNT]) -> Self {
+            let rig = rig();
+            let mut align = TimeAlignment::new(AlignOptions {
+                time_align: false,
+                continuity_ns: 100_000_000,
+                max_blob_motion_px: 40.0,
+            });
+            for (cam, camera) in [CameraId::Left, CameraId::Right].into_iter().enumerate() {
+                let blobs = leds
+                    .iter()
+                    .map(|p| rig.project(camera, p).unwrap())
+                    .collect();
+                align.push(cam, 1_000, blobs);
+            }
+            let mut points = PairPoints::default();
+            align.prepare(&rig, 1, 1_000, &mut points);
+            let candidates = (0..LED_COUNT)
+                .map(|k| Candidate::at(k, k, leds[k]))
+                .collect();
+            let tip = TipEstimator::new(&PenGeometry::thesis());
+            Self {
+                rig,
+                align,
+                points,
+                candidates,
+                tip,
+                leds,
+            }
+        }
+
+        fn view(&self) -> PairView<'_> {
+            PairView {
+                rig: &self.rig,
+                align: &self.align,
+                points: &self.points,
+                candidates: &self.candidates,
+                tip: &self.tip,
+                t: 1_000,
+            }
+        }
+
+        fn estimate(&self) -> TipEstimate {
+            self.tip.estimate(&self.leds.map(Some)).unwrap()
+        }
+    }
+
+    /// A pen across the view is safe; the same pen pointing at the left camera (LED images on top
+    /// of one another) is not.
+    #[test]
+    fn overlapping_led_images_are_unsafe() {
+        let guard = LabelGuard::new(&TrackerConfig::default());
+        let across = Scene::new(pen(Vector3::new(0.05, 0.0, 0.7), Vector3::x()));
+        assert!(guard.pen_images_separated(&across.view(), &across.estimate()));
+        assert!(guard.is_safe(&across.view(), &labelled(4), &across.estimate(), true));
+        let dir = Vector3::new(0.01, 0.0, -1.0).normalize();
+        let at_camera = Scene::new(pen(Vector3::new(0.0, 0.0, 0.6), dir));
+        assert!(!guard.pen_images_separated(&at_camera.view(), &at_camera.estimate()));
+    }
+
+    /// A stray blob next to a labelled one makes the labelling unsafe.
+    #[test]
+    fn a_blob_beside_a_labelled_one_is_unsafe() {
+        let guard = LabelGuard::new(&TrackerConfig::default());
+        let mut s = Scene::new(pen(Vector3::new(0.05, 0.0, 0.7), Vector3::x()));
+        assert!(guard.labelled_blobs_isolated(&s.view(), &labelled(4)));
+        let mut blobs = s.align.current(0).unwrap().blobs.clone();
+        blobs.push([blobs[2][0] + 2.0, blobs[2][1] + 1.0]);
+        let right = s.align.current(1).unwrap().blobs.clone();
+        s.align.push(0, 1_000, blobs);
+        s.align.push(1, 1_000, right);
+        assert!(!guard.labelled_blobs_isolated(&s.view(), &labelled(4)));
+        assert!(
+            guard.labelled_blobs_isolated(&s.view(), &labelled(2)),
+            "LED 3 not labelled"
+        );
+    }
+
+    /// Two LEDs need a prediction that puts each labelled blob nearest its own LED, and a
+    /// fresh prior; remembering a labelling provides the prediction.
+    #[test]
+    fn two_leds_need_a_matching_prediction() {
+        let cfg = TrackerConfig::default();
+        let mut guard = LabelGuard::new(&cfg);
+        let mut s = Scene::new(pen(Vector3::new(0.05, 0.0, 0.7), Vector3::x()));
+        let two = labelled(2);
+        let vision = s.estimate();
+        assert!(
+            !guard.labels_match_prediction(&s.view(), &two),
+            "no prediction yet"
+        );
+        assert!(!guard.is_safe(&s.view(), &two, &vision, false));
+        let all = labelled(4);
+        let (tip, cands) = (s.tip.clone(), s.candidates.clone());
+        guard.remember(&mut s.align, &tip, &cands, 1, 1_000, &all, &vision);
+        assert!(guard.recent_leds(1_000 + cfg.continuity_ns).is_some());
+        assert!(guard.recent_leds(1_001 + cfg.continuity_ns).is_none());
+        assert_eq!(
+            s.align.current(0).unwrap().labels,
+            [Some(0), Some(1), Some(2), Some(3)]
+        );
+        assert!(guard.labels_match_prediction(&s.view(), &two));
+        assert!(guard.is_safe(&s.view(), &two, &vision, false));
+        assert!(
+            !guard.is_safe(&s.view(), &two, &vision, true),
+            "stale prior"
+        );
+        // LEDs 1 and 2 labelled the other way round contradict the prediction.
+        let swapped = Identification {
+            assignment: [Some(1), Some(0), None, None],
+            ..two
+        };
+        assert!(!guard.labels_match_prediction(&s.view(), &swapped));
+    }
+}
