@@ -1,6 +1,8 @@
 //! `fires replay REC_DIR --out OUT_DIR`: a recording through the tracker; writes strokes.json, track.csv,
 //! report.json (with accuracy figures when the recording has ground truth) and then tip_error.png, the tip
 //! error over time of the vision-tracked samples (its scale is in report.json's `tip_error_plot`).
+//! A damaged recording replays as far as it is whole; report.json's `damaged` says what was skipped
+//! (docs/recording.md, "Damaged recordings") and each kind of damage is one warning line on stderr.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -34,7 +36,7 @@ pub struct ReplayArgs {
 
 /// Replays and writes the outputs; returns the report (used by `fires demo`).
 pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<serde_json::Value> {
-    let reader = RecordingReader::open(&args.recording)
+    let reader = RecordingReader::open_salvaging(&args.recording)
         .with_context(|| format!("cannot open recording {}", args.recording.display()))?;
     let mut config = ReplayConfig::default();
     config.tracker.fusion = match args.fusion.as_str() {
@@ -70,6 +72,7 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<serde_json::Value> {
         let scale = tip_error_png(&path, &points)?;
         report["tip_error_plot"] = serde_json::json!({ "path": path, "scale": scale });
     }
+    add_damage(&reader, &mut report)?;
     write_json(&args.out.join("report.json"), &report)?;
     Ok(report)
 }
@@ -109,8 +112,19 @@ fn bar_to_dir(reader: &RecordingReader, args: &ReplayArgs) -> anyhow::Result<ser
         }
         report[format!("method_{name}")] = r;
     }
+    add_damage(&reader, &mut report)?;
     write_json(&args.out.join("report.json"), &report)?;
     Ok(report)
+}
+
+/// Adds `damaged` (what the salvaging reader skipped) to the report and prints one warning per kind.
+fn add_damage(reader: &RecordingReader, report: &mut serde_json::Value) -> anyhow::Result<()> {
+    let damage = reader.damage();
+    for w in &damage.warnings {
+        eprintln!("warning: {}: {w}", reader.dir().display());
+    }
+    report["damaged"] = serde_json::to_value(&damage)?;
+    Ok(())
 }
 
 /// `fires replay`: prints the report as one JSON line.
