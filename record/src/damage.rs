@@ -135,7 +135,10 @@ impl DamageLog {
             if let Some((at, why)) = s.skipped.first() {
                 d.skipped_records
                     .insert(name.clone(), s.skipped.len() as u64);
-                skipped.push(format!("{name}: {} (first at {at}: {why})", s.skipped.len()));
+                skipped.push(format!(
+                    "{name}: {} (first at {at}: {why})",
+                    s.skipped.len()
+                ));
             }
             if let Some((offset, bytes, why)) = &s.stopped {
                 d.unread_bytes.insert(name.clone(), *bytes);

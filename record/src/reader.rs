@@ -158,9 +158,7 @@ impl RecordingReader {
     /// What the reads so far skipped (always clean for a strict reader).
     pub fn damage(&self) -> Damage {
         self.salvage.as_ref().map_or_else(Damage::default, |log| {
-            log.lock()
-                .unwrap_or_else(PoisonError::into_inner)
-                .summary()
+            log.lock().unwrap_or_else(PoisonError::into_inner).summary()
         })
     }
 

@@ -138,7 +138,8 @@ pub fn scan_link(bytes: &[u8]) -> LinkScan {
                 pos = end;
             }
             Rec::Bad(problem) => {
-                out.first_problem.get_or_insert((pos as u64, problem.clone()));
+                out.first_problem
+                    .get_or_insert((pos as u64, problem.clone()));
                 let resync =
                     (pos + 1..bytes.len()).find(|&q| chain_starts_at(bytes, q, previous_ns));
                 if let Some(q) = resync {

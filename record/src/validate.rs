@@ -146,13 +146,20 @@ impl Meta {
                 return Err(problem(
                     format!("cameras[{k}].id"),
                     s.id,
-                    format!("no calibration for this camera (rig.cameras has {})", cams.len()),
+                    format!(
+                        "no calibration for this camera (rig.cameras has {})",
+                        cams.len()
+                    ),
                 ));
             }
             if self.cameras[..k].iter().any(|o| o.id == s.id) {
                 return Err(problem(format!("cameras[{k}].id"), s.id, "listed twice"));
             }
-            positive(format!("cameras[{k}].nominal_rate_hz"), s.nominal_rate_hz, "frame rate")?;
+            positive(
+                format!("cameras[{k}].nominal_rate_hz"),
+                s.nominal_rate_hz,
+                "frame rate",
+            )?;
         }
         let l = &self.pen.led_positions_m;
         for (i, &v) in l.iter().enumerate() {
@@ -169,7 +176,10 @@ impl Meta {
             return Err(problem(
                 format!("pen.led_positions_m[{i}]"),
                 l[i],
-                format!("LED positions must increase strictly (previous {})", l[i - 1]),
+                format!(
+                    "LED positions must increase strictly (previous {})",
+                    l[i - 1]
+                ),
             ));
         }
         let tip = self.pen.tip_offset_m;

@@ -136,11 +136,16 @@ impl RecordingWriter {
 
     /// As [`RecordingWriter::create`], with the given durability options. `meta` must pass
     /// [`Meta::validate`]: a recording the reader would refuse is not written.
-    pub fn create_with(dir: &Path, meta: &Meta, options: WriterOptions) -> Result<Self, RecordError> {
-        meta.validate().map_err(|problem| RecordError::InvalidMeta {
-            path: dir.join("meta.json"),
-            problem,
-        })?;
+    pub fn create_with(
+        dir: &Path,
+        meta: &Meta,
+        options: WriterOptions,
+    ) -> Result<Self, RecordError> {
+        meta.validate()
+            .map_err(|problem| RecordError::InvalidMeta {
+                path: dir.join("meta.json"),
+                problem,
+            })?;
         fs::create_dir_all(dir).map_err(|e| RecordError::io(dir, e))?;
         write_json_file(dir.join("meta.json"), meta)?;
         let link = Out::create(dir.join("link.bin"))?;

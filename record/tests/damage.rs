@@ -116,7 +116,10 @@ fn intact_recording_reads_the_same_salvaged_and_strict() {
     assert_eq!(strict.frames(0).unwrap(), salv.frames(0).unwrap());
     assert_eq!(strict.imu_truth().unwrap(), salv.imu_truth().unwrap());
     for f in salv.frames(0).unwrap() {
-        assert!(matches!(salv.frame_image(&f).unwrap(), FrameImage::Image(_)));
+        assert!(matches!(
+            salv.frame_image(&f).unwrap(),
+            FrameImage::Image(_)
+        ));
     }
     // world.json was never written: lost, but only when asked for.
     assert!(salv.damage().is_clean(), "{:?}", salv.damage());
@@ -147,7 +150,10 @@ fn torn_last_records_are_dropped_and_counted_per_stream() {
     assert_eq!(chunks, (0..19).map(chunk).collect::<Vec<_>>());
     assert_eq!(r.frames(1).unwrap().len(), 4);
     assert_eq!(r.frames(0).unwrap().len(), 5);
-    assert_eq!(r.imu_truth().unwrap().unwrap(), (0..4).map(imu).collect::<Vec<_>>());
+    assert_eq!(
+        r.imu_truth().unwrap().unwrap(),
+        (0..4).map(imu).collect::<Vec<_>>()
+    );
     // Reading again does not count twice.
     r.link_chunks().unwrap();
     let dmg = r.damage();
@@ -156,10 +162,21 @@ fn torn_last_records_are_dropped_and_counted_per_stream() {
         let b = fs::read(d.join(rel)).unwrap();
         (b.len() - b[..b.len() - 1].iter().rposition(|&c| c == b'\n').unwrap() - 1) as u64
     };
-    assert_eq!(dmg.torn_bytes["cam1/frames.jsonl"], line_len("cam1/frames.jsonl"));
-    assert_eq!(dmg.torn_bytes["truth/imu.jsonl"], line_len("truth/imu.jsonl"));
+    assert_eq!(
+        dmg.torn_bytes["cam1/frames.jsonl"],
+        line_len("cam1/frames.jsonl")
+    );
+    assert_eq!(
+        dmg.torn_bytes["truth/imu.jsonl"],
+        line_len("truth/imu.jsonl")
+    );
     assert_eq!(dmg.torn_bytes.len(), 3);
-    assert_eq!(dmg.warnings.len(), 1, "one line per kind: {:?}", dmg.warnings);
+    assert_eq!(
+        dmg.warnings.len(),
+        1,
+        "one line per kind: {:?}",
+        dmg.warnings
+    );
     assert!(dmg.warnings[0].contains("link.bin") && dmg.warnings[0].contains("13 bytes"));
 }
 
@@ -223,7 +240,10 @@ fn corrupt_lines_are_skipped_and_the_rest_read() {
     let dmg = r.damage();
     assert_eq!(dmg.skipped_records["cam0/frames.jsonl"], 2);
     assert!(dmg.torn_bytes.is_empty());
-    assert!(RecordingReader::open(dir.path()).unwrap().frames(0).is_err());
+    assert!(RecordingReader::open(dir.path())
+        .unwrap()
+        .frames(0)
+        .is_err());
 }
 
 #[test]

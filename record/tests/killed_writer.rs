@@ -159,7 +159,10 @@ fn killed_writer_leaves_a_readable_recording() {
         child.kill().expect("SIGKILL");
         let status = child.wait().expect("wait");
         assert!(!status.success(), "killed");
-        let acknowledged = reader.join().expect("reader thread").expect("at least one record");
+        let acknowledged = reader
+            .join()
+            .expect("reader thread")
+            .expect("at least one record");
 
         let r = RecordingReader::open_salvaging(dir.path()).expect("meta.json survives");
         let chunks = r.link_chunks().expect("no error");
@@ -190,8 +193,15 @@ fn killed_writer_leaves_a_readable_recording() {
         }
         // At most the record being written when the kill came is torn; nothing is skipped or lost.
         let dmg = r.damage();
-        assert!(dmg.skipped_records.is_empty() && dmg.unread_bytes.is_empty(), "{dmg:?}");
-        assert_eq!((dmg.frames_missing, dmg.frames_unreadable), (0, 0), "{dmg:?}");
+        assert!(
+            dmg.skipped_records.is_empty() && dmg.unread_bytes.is_empty(),
+            "{dmg:?}"
+        );
+        assert_eq!(
+            (dmg.frames_missing, dmg.frames_unreadable),
+            (0, 0),
+            "{dmg:?}"
+        );
         assert!(dmg.lost_files.is_empty(), "{dmg:?}");
     }
 }

@@ -67,10 +67,13 @@ fn negative_focal_length_is_refused_naming_the_field() {
         .expect_err("negative fx")
         .to_string();
     assert!(
-        err.ends_with("meta.json: rig.cameras[1].intrinsics.fx = -1.0: focal length must be positive"),
+        err.ends_with(
+            "meta.json: rig.cameras[1].intrinsics.fx = -1.0: focal length must be positive"
+        ),
         "{err}"
     );
-    assert!(problem(|m| m.rig.cameras[0].intrinsics.fy = 0.0).starts_with("rig.cameras[0].intrinsics.fy = 0.0"));
+    assert!(problem(|m| m.rig.cameras[0].intrinsics.fy = 0.0)
+        .starts_with("rig.cameras[0].intrinsics.fy = 0.0"));
     assert!(problem(|m| m.rig.cameras[0].intrinsics.fx = f64::NAN).contains("focal length"));
 }
 
@@ -85,8 +88,10 @@ fn zero_baseline_is_refused() {
     );
     assert!(err.contains("at least 0.01 m"), "{err}");
     // Just below and just above the minimum.
-    assert!(problem(|m| m.rig.cameras[1].extrinsics.translation_m = [-0.0099, 0.0, 0.0])
-        .contains("baseline"));
+    assert!(
+        problem(|m| m.rig.cameras[1].extrinsics.translation_m = [-0.0099, 0.0, 0.0])
+            .contains("baseline")
+    );
     let mut ok = meta();
     ok.rig.cameras[1].extrinsics.translation_m = [-0.0101, 0.0, 0.0];
     assert!(ok.validate().is_ok());
@@ -96,7 +101,10 @@ fn zero_baseline_is_refused() {
 fn rotations_must_be_proper_and_orthonormal() {
     // A reflection: orthonormal, determinant -1.
     let refl = problem(|m| m.rig.cameras[1].extrinsics.rotation[2][2] = -1.0);
-    assert!(refl.contains("rig.cameras[1].extrinsics.rotation") && refl.contains("determinant"), "{refl}");
+    assert!(
+        refl.contains("rig.cameras[1].extrinsics.rotation") && refl.contains("determinant"),
+        "{refl}"
+    );
     // A scaled matrix.
     let scaled = problem(|m| m.rig.cameras[1].extrinsics.rotation[0][0] = 1.0 + 1e-5);
     assert!(scaled.contains("not a rotation"), "{scaled}");
@@ -104,7 +112,8 @@ fn rotations_must_be_proper_and_orthonormal() {
     let mut ok = meta();
     let (s, c) = (0.3f64.sin(), 0.3f64.cos());
     let r = |v: f64| (v * 1e9).round() / 1e9;
-    ok.rig.cameras[1].extrinsics.rotation = [[r(c), 0.0, r(s)], [0.0, 1.0, 0.0], [r(-s), 0.0, r(c)]];
+    ok.rig.cameras[1].extrinsics.rotation =
+        [[r(c), 0.0, r(s)], [0.0, 1.0, 0.0], [r(-s), 0.0, r(c)]];
     assert!(ok.validate().is_ok(), "{:?}", ok.validate());
 }
 
@@ -112,11 +121,15 @@ fn rotations_must_be_proper_and_orthonormal() {
 fn distortion_pen_streams_and_link_are_checked() {
     assert!(problem(|m| m.rig.cameras[0].intrinsics.k2 = f64::INFINITY)
         .starts_with("rig.cameras[0].intrinsics.k2 = inf: distortion"));
-    assert!(problem(|m| m.pen.led_positions_m[2] = 0.05).starts_with("pen.led_positions_m[2] = 0.05"));
+    assert!(
+        problem(|m| m.pen.led_positions_m[2] = 0.05).starts_with("pen.led_positions_m[2] = 0.05")
+    );
     assert!(problem(|m| m.pen.led_positions_m[0] = 0.01).starts_with("pen.led_positions_m[0]"));
     assert!(problem(|m| m.pen.tip_offset_m = -0.02).starts_with("pen.tip_offset_m = -0.02"));
     assert!(problem(|m| m.cameras[0].id = 2).starts_with("cameras[0].id = 2"));
-    assert!(problem(|m| m.cameras[0].nominal_rate_hz = 0.0).starts_with("cameras[0].nominal_rate_hz"));
+    assert!(
+        problem(|m| m.cameras[0].nominal_rate_hz = 0.0).starts_with("cameras[0].nominal_rate_hz")
+    );
     assert!(problem(|m| m.link.sample_rate_hz = 0).starts_with("link.sample_rate_hz = 0"));
     // The writer refuses to write what the reader would refuse.
     let dir = tempfile::tempdir().unwrap();

@@ -28,8 +28,8 @@ fn bad_arguments_are_typed_errors() {
 #[test]
 fn unknown_scenario_error_lists_every_scenario() {
     let dir = tempfile::tempdir().unwrap();
-    let err = run_scenario("nope", 1, 1.0, dir.path(), SimOptions::default())
-        .expect_err("unknown name");
+    let err =
+        run_scenario("nope", 1, 1.0, dir.path(), SimOptions::default()).expect_err("unknown name");
     let msg = err.to_string();
     assert!(msg.contains("\"nope\""), "{msg}");
     let listed = msg

@@ -112,7 +112,7 @@ fn bar_to_dir(reader: &RecordingReader, args: &ReplayArgs) -> anyhow::Result<ser
         }
         report[format!("method_{name}")] = r;
     }
-    add_damage(&reader, &mut report)?;
+    add_damage(reader, &mut report)?;
     write_json(&args.out.join("report.json"), &report)?;
     Ok(report)
 }

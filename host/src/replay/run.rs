@@ -328,5 +328,9 @@ fn camera_frame(
         }
         Err(_) => Vec::new(),
     };
-    Ok(Some(CameraFrame::from_blobs(id, f.exposure_time_ns, &blobs)))
+    Ok(Some(CameraFrame::from_blobs(
+        id,
+        f.exposure_time_ns,
+        &blobs,
+    )))
 }
