@@ -231,7 +231,7 @@ impl RecordingWriter {
         }
     }
 
-    /// Ends one appended record on `out`: flushed (and synced when due) as the options say.
+    /// Ends one record appended to `which`: flushed (and synced when due) as the options say.
     fn end_record(&mut self, which: Stream) -> Result<(), RecordError> {
         if self.options.flush_each_record {
             let out = match which {
