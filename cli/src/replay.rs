@@ -1,6 +1,8 @@
 //! `fires replay REC_DIR --out OUT_DIR`: a recording through the tracker; writes strokes.json, track.csv,
 //! report.json (with accuracy figures when the recording has ground truth) and then tip_error.png, the tip
 //! error over time of the vision-tracked samples (its scale is in report.json's `tip_error_plot`).
+//! A damaged recording replays as far as it is whole; report.json's `damaged` says what was skipped
+//! (docs/recording.md, "Damaged recordings") and each kind of damage is one warning line on stderr.
 
 use std::path::PathBuf;
 
@@ -79,7 +81,7 @@ impl World {
 
 /// Replays and writes the outputs; returns the report (used by `fires demo`).
 pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<Report> {
-    let reader = RecordingReader::open(&args.recording)
+    let reader = RecordingReader::open_salvaging(&args.recording)
         .with_context(|| format!("cannot open recording {}", args.recording.display()))?;
     let mut config = ReplayConfig::default();
     config.tracker.fusion = args.fusion.kind();
@@ -96,6 +98,7 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<Report> {
                 "single_frame_samples": bar.single_frame_samples,
             }),
         )?;
+        warn_damage(&reader, &bar.report.damaged);
         let report = Report::Bar(Box::new(bar.report));
         write_json(&args.out.join("report.json"), &report)?;
         return Ok(report);
@@ -116,9 +119,17 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<Report> {
         let scale = tip_error_png(&path, &points)?;
         report.tip_error_plot = Some(TipErrorPlot { path, scale });
     }
+    warn_damage(&reader, &report.damaged);
     let report = Report::Replay(Box::new(report));
     write_json(&args.out.join("report.json"), &report)?;
     Ok(report)
+}
+
+/// One warning line on standard error per kind of damage the salvaging reader skipped.
+fn warn_damage(reader: &RecordingReader, damage: &fires_record::Damage) {
+    for w in &damage.warnings {
+        eprintln!("warning: {}: {w}", reader.dir().display());
+    }
 }
 
 /// `fires replay`: prints the report as one JSON line.

@@ -6,7 +6,10 @@
 //! and writes a recording as it goes. IMU samples, button changes and frames then pass through a short
 //! reorder buffer ([`LiveConfig::reorder_ns`]: the radio and the cameras deliver with different latencies)
 //! into the same [`Session`] that replay uses: tracker with IMU fusion, strokes, display smoothing. The
-//! recording is finished (every file flushed) whenever the loop ends.
+//! recording is written crash-safe ([`fires_record::WriterOptions::default`]: every record flushed as it is
+//! appended, data synced to disk about every second, also while the session is quiet), so a killed process
+//! leaves a recording that replays up to its last record and a power cut loses about a second; it is finished
+//! (every file synced) whenever the loop ends.
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -28,7 +31,7 @@ use crate::clock::HostClock;
 use crate::link::{
     ButtonChange, LinkError, LinkEvent, LiveImuTimer, SerialConfig, SerialLink, TimedLinkEvent,
 };
-use crate::meta::{imu_scale, pen_geometry, stereo_rig};
+use crate::meta::{checked_pen_geometry, imu_scale, stereo_rig};
 use crate::session::{Session, SessionSample, StrokeConfig};
 use crate::stereo::CameraId;
 use crate::track::fusion::ImuSample;
@@ -121,6 +124,9 @@ pub enum LiveError {
     /// The rig or tracker settings were rejected.
     #[error("tracker: {0}")]
     Tracker(String),
+    /// The rig calibration or pen geometry is impossible (a field and what is wrong with it).
+    #[error("calibration: {0}")]
+    Calibration(#[from] fires_record::MetaProblem),
 }
 
 enum Msg {
@@ -164,9 +170,11 @@ pub fn run_live(
 ) -> Result<LiveOutput, LiveError> {
     let start = Instant::now();
     let meta = live_meta(cfg.rig.clone(), cfg.nominal_rate_hz);
+    meta.validate()?;
     let rig = stereo_rig(&meta).map_err(|e| LiveError::Tracker(e.to_string()))?;
     let mut tracker_cfg = cfg.tracker.clone();
-    tracker_cfg.pen = pen_geometry(&meta).map_err(|e| LiveError::Tracker(e.to_string()))?;
+    tracker_cfg.pen = checked_pen_geometry(&meta, tracker_cfg.identify.tolerance)
+        .map_err(|e| LiveError::Tracker(e.to_string()))?;
     let tracker = Tracker::new(rig, tracker_cfg).map_err(|e| LiveError::Tracker(e.to_string()))?;
     let mut session = Session::new(tracker, cfg.strokes);
     let mut timer = LiveImuTimer::new(meta.link.baud, meta.link.sample_rate_hz, imu_scale(&meta));
@@ -287,7 +295,14 @@ pub fn run_live(
         }
         let msg = match rx.recv_timeout(Duration::from_millis(20)) {
             Ok(m) => m,
-            Err(mpsc::RecvTimeoutError::Timeout) => continue,
+            Err(mpsc::RecvTimeoutError::Timeout) => {
+                // Nothing arrives: the last records still reach the disk within the sync interval.
+                if let Some(Err(e)) = writer.as_mut().map(RecordingWriter::sync_if_due) {
+                    stop.store(true, Ordering::Relaxed);
+                    failure.get_or_insert(e.into());
+                }
+                continue;
+            }
             Err(mpsc::RecvTimeoutError::Disconnected) => break,
         };
         let step = (|| -> Result<(), LiveError> {

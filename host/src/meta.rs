@@ -17,6 +17,14 @@ pub enum MetaError {
     /// The tracker is built for the four-LED pen.
     #[error("the pen has {0} LED(s); the tracker needs 4 (two-LED bars are measured separately)")]
     LedCount(usize),
+    /// The pen's LED distances cannot be told apart by the identification.
+    #[error("meta.json: pen.led_positions_m = {positions}: {reason}")]
+    PenNotIdentifiable {
+        /// The LED positions found.
+        positions: String,
+        /// What is wrong with them.
+        reason: String,
+    },
 }
 
 /// The stereo rig of a recording; camera 0 (left) defines the world frame.
@@ -63,6 +71,21 @@ pub fn pen_geometry(meta: &Meta) -> Result<PenGeometry, MetaError> {
         led_offsets: [*a, *b, *c, *d],
         tip_offset: meta.pen.tip_offset_m,
     })
+}
+
+/// The pen of a recording, checked with [`PenGeometry::validate`] at the identification's distance tolerance
+/// `tolerance` ([`crate::track::identify::IdentifyConfig::tolerance`]): no two of its six LED distances may be
+/// closer than `2 * tolerance`.
+pub fn checked_pen_geometry(meta: &Meta, tolerance: f64) -> Result<PenGeometry, MetaError> {
+    let pen = pen_geometry(meta)?;
+    pen.validate(tolerance)
+        .map_err(|e| MetaError::PenNotIdentifiable {
+            positions: format!("{:?}", meta.pen.led_positions_m),
+            reason: format!(
+                "{e} ({tolerance} m, the identification's distance tolerance): it could not tell them apart"
+            ),
+        })?;
+    Ok(pen)
 }
 
 /// Count -> SI conversion from the board's scale factors (magnetometer in µT, the fusion's unit).

@@ -63,6 +63,26 @@ pub enum RecordError {
         /// Largest accepted length.
         limit: u32,
     },
+    /// A `link.bin` record whose time is before the previous record's (times never decrease).
+    #[error("{path}: record at byte offset {offset} has time {time_ns} ns, the previous record {previous_ns} ns")]
+    LinkTimeOutOfOrder {
+        /// The file.
+        path: PathBuf,
+        /// Offset of the record's start.
+        offset: u64,
+        /// The record's time.
+        time_ns: u64,
+        /// The previous record's time.
+        previous_ns: u64,
+    },
+    /// `meta.json` parses but describes an impossible rig, pen or link.
+    #[error("{path}: {problem}")]
+    InvalidMeta {
+        /// The file.
+        path: PathBuf,
+        /// The field and what is wrong with it.
+        problem: crate::validate::MetaProblem,
+    },
     /// A PGM image that is not an 8-bit binary (P5) PGM of the stated size.
     #[error("{path}: bad PGM image: {reason}")]
     BadImage {

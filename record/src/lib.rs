@@ -9,24 +9,30 @@
 //!
 //! [`RecordingWriter`] and [`RecordingReader`] are the only code that touches these files; the simulator, the
 //! tracker and the CLI all go through them. Nothing here panics on malformed input: every failure is a
-//! [`RecordError`] naming the file and the line or byte offset.
+//! [`RecordError`] naming the file and the line or byte offset. [`RecordingReader::open_salvaging`] reads a
+//! damaged recording (a writer killed mid-record, a lost frame image) as far as it is whole and reports what
+//! it skipped as a [`Damage`].
 
+pub mod damage;
 pub mod error;
 pub mod image;
 pub mod meta;
 pub mod reader;
 pub mod report;
+pub mod salvage;
 pub mod strokes;
 pub mod truth;
+pub mod validate;
 pub mod writer;
 
+pub use damage::{Damage, DamageLog};
 pub use error::RecordError;
 pub use image::GrayImage;
 pub use meta::{
     CalibratedCamera, CameraModel, CameraStream, Extrinsics, FrameContent, LinkInfo, Meta,
     PenGeometry, RigCalibration, Source, UndistortError, FORMAT_MAJOR, FORMAT_NAME, FORMAT_VERSION,
 };
-pub use reader::RecordingReader;
+pub use reader::{FrameImage, RecordingReader};
 pub use report::{ReplayReport, Report, REPORT_FORMAT, REPORT_VERSION};
 pub use strokes::{
     Stroke, StrokePiece, StrokePoint, StrokesError, StrokesFile, STROKES_FORMAT, STROKES_VERSION,
@@ -35,7 +41,8 @@ pub use truth::{
     ExposureTruth, ImuTruth, Interval, LedTruth, PacketFate, PacketTruth, PoseTruth, StrokeKind,
     StrokeTruth, Visibility, WorldTruth,
 };
-pub use writer::RecordingWriter;
+pub use validate::{MetaProblem, MIN_BASELINE_M};
+pub use writer::{RecordingWriter, WriterOptions};
 
 use serde::{Deserialize, Serialize};
 

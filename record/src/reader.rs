@@ -1,19 +1,39 @@
 //! Reads a recording directory.
 
+use crate::damage::{Damage, DamageLog, FrameLoss, StreamDamage};
 use crate::error::RecordError;
 use crate::image::GrayImage;
 use crate::meta::{Meta, FORMAT_MAJOR, FORMAT_NAME};
+use crate::salvage::{scan_jsonl, scan_link, LinkProblem};
 use crate::truth::{ExposureTruth, ImuTruth, PacketTruth, StrokeTruth, WorldTruth};
 use crate::{camera_dir_name, CameraFrame, LinkChunk, MAX_LINK_RECORD};
 use serde::de::DeserializeOwned;
 use std::fs;
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, PoisonError};
 
 /// An open recording: the metadata is read and checked; streams are read on demand.
+///
+/// A reader opened with [`RecordingReader::open`] is strict: any damage is an error. One opened with
+/// [`RecordingReader::open_salvaging`] keeps what is whole (torn last records dropped, corrupt records skipped,
+/// missing or unreadable frame images reported as [`FrameImage::Lost`]) and logs what it skipped; see
+/// [`RecordingReader::damage`]. Clones share the log.
 #[derive(Clone, Debug)]
 pub struct RecordingReader {
     dir: PathBuf,
     meta: Meta,
+    salvage: Option<Arc<Mutex<DamageLog>>>,
+}
+
+/// The image of one frame, as a salvaging reader sees it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FrameImage {
+    /// The frame names no image (a blob camera).
+    NoImage,
+    /// The image.
+    Image(GrayImage),
+    /// The frame names an image that is missing or unreadable (logged; only a salvaging reader returns this).
+    Lost,
 }
 
 fn read_file(path: &Path) -> Result<Vec<u8>, RecordError> {
@@ -27,6 +47,10 @@ fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, RecordError> {
         line: e.line(),
         cause: e,
     })
+}
+
+fn plain_image_name(name: &str) -> bool {
+    !name.is_empty() && !name.contains(['/', '\\']) && name != "." && name != ".."
 }
 
 fn read_jsonl<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>, RecordError> {
@@ -46,39 +70,35 @@ fn read_jsonl<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>, RecordError> {
     Ok(out)
 }
 
-/// Parses `link.bin` bytes; `path` names the source in errors.
+/// Parses `link.bin` bytes strictly: the first record that is not whole is an error; `path` names the source.
 pub fn parse_link(bytes: &[u8], path: &Path) -> Result<Vec<LinkChunk>, RecordError> {
-    let mut out = Vec::new();
-    let mut pos = 0usize;
-    while pos < bytes.len() {
-        let truncated = || RecordError::LinkTruncated {
-            path: path.to_path_buf(),
-            offset: pos as u64,
-        };
-        let head = bytes.get(pos..pos + 12).ok_or_else(truncated)?;
-        let mut t = [0u8; 8];
-        t.copy_from_slice(&head[..8]);
-        let mut l = [0u8; 4];
-        l.copy_from_slice(&head[8..12]);
-        let len = u32::from_le_bytes(l);
-        if len > MAX_LINK_RECORD {
-            return Err(RecordError::LinkRecordTooLong {
-                path: path.to_path_buf(),
-                offset: pos as u64,
-                len,
-                limit: MAX_LINK_RECORD,
-            });
-        }
-        let body = bytes
-            .get(pos + 12..pos + 12 + len as usize)
-            .ok_or_else(truncated)?;
-        out.push(LinkChunk {
-            host_time_ns: u64::from_le_bytes(t),
-            bytes: body.to_vec(),
-        });
-        pos += 12 + len as usize;
+    let scan = scan_link(bytes);
+    match scan.first_problem {
+        None => Ok(scan.chunks),
+        Some((offset, problem)) => Err(link_error(path, offset, problem)),
     }
-    Ok(out)
+}
+
+fn link_error(path: &Path, offset: u64, problem: LinkProblem) -> RecordError {
+    let path = path.to_path_buf();
+    match problem {
+        LinkProblem::Truncated => RecordError::LinkTruncated { path, offset },
+        LinkProblem::TooLong(len) => RecordError::LinkRecordTooLong {
+            path,
+            offset,
+            len,
+            limit: MAX_LINK_RECORD,
+        },
+        LinkProblem::BadTime {
+            time_ns,
+            previous_ns,
+        } => RecordError::LinkTimeOutOfOrder {
+            path,
+            offset,
+            time_ns,
+            previous_ns,
+        },
+    }
 }
 
 /// Checks `format` and `format_version` of a metadata record.
@@ -105,15 +125,47 @@ pub fn check_version(meta: &Meta, path: &Path) -> Result<(), RecordError> {
 }
 
 impl RecordingReader {
-    /// Opens a recording: reads `meta.json` and checks its format name and major version.
+    /// Opens a recording strictly: reads `meta.json`, checks its format name and major version and validates
+    /// the calibration and pen geometry ([`Meta::validate`]); every later read fails on any damage.
     pub fn open(dir: &Path) -> Result<Self, RecordError> {
         let path = dir.join("meta.json");
         let meta: Meta = read_json(&path)?;
         check_version(&meta, &path)?;
+        meta.validate().map_err(|e| RecordError::InvalidMeta {
+            path: path.clone(),
+            problem: e,
+        })?;
         Ok(RecordingReader {
             dir: dir.to_path_buf(),
             meta,
+            salvage: None,
         })
+    }
+
+    /// Opens a recording like [`RecordingReader::open`] (a bad `meta.json` is still an error), but later reads
+    /// keep what is whole and log the rest instead of failing (docs/recording.md, "Damaged recordings").
+    pub fn open_salvaging(dir: &Path) -> Result<Self, RecordError> {
+        let mut r = Self::open(dir)?;
+        r.salvage = Some(Arc::new(Mutex::new(DamageLog::default())));
+        Ok(r)
+    }
+
+    /// Whether this reader salvages damaged streams instead of failing.
+    pub fn is_salvaging(&self) -> bool {
+        self.salvage.is_some()
+    }
+
+    /// What the reads so far skipped (always clean for a strict reader).
+    pub fn damage(&self) -> Damage {
+        self.salvage.as_ref().map_or_else(Damage::default, |log| {
+            log.lock().unwrap_or_else(PoisonError::into_inner).summary()
+        })
+    }
+
+    fn log(&self, f: impl FnOnce(&mut DamageLog)) {
+        if let Some(log) = &self.salvage {
+            f(&mut log.lock().unwrap_or_else(PoisonError::into_inner));
+        }
     }
 
     /// The recording directory.
@@ -126,24 +178,93 @@ impl RecordingReader {
         &self.meta
     }
 
-    /// All link records in file order.
-    pub fn link_chunks(&self) -> Result<Vec<LinkChunk>, RecordError> {
-        let path = self.dir.join("link.bin");
-        parse_link(&read_file(&path)?, &path)
+    /// Reads a whole file; when salvaging, a file that cannot be read is logged as lost and gives `None`.
+    fn read_or_lose(&self, rel: &str) -> Result<Option<Vec<u8>>, RecordError> {
+        let path = self.dir.join(rel);
+        match fs::read(&path) {
+            Ok(b) => {
+                self.log(|l| l.set_lost_file(rel, None));
+                Ok(Some(b))
+            }
+            Err(e) if self.is_salvaging() => {
+                self.log(|l| l.set_lost_file(rel, Some(e.to_string())));
+                Ok(None)
+            }
+            Err(e) => Err(RecordError::io(path, e)),
+        }
     }
 
-    /// All frames of camera `camera`, in file order.
+    /// A `.jsonl` stream: strict, or salvaged (`None` when the file is lost).
+    fn jsonl<T: DeserializeOwned>(
+        &self,
+        rel: &str,
+        check: impl Fn(&T) -> Result<(), String>,
+    ) -> Result<Option<Vec<T>>, RecordError> {
+        if !self.is_salvaging() {
+            return read_jsonl(&self.dir.join(rel)).map(Some);
+        }
+        let Some(bytes) = self.read_or_lose(rel)? else {
+            self.log(|l| l.set_stream(rel, StreamDamage::default()));
+            return Ok(None);
+        };
+        let (v, damage) = scan_jsonl(&bytes, check);
+        self.log(|l| l.set_stream(rel, damage));
+        Ok(Some(v))
+    }
+
+    /// A whole-file JSON document: strict, or salvaged (`None` when the file is missing or does not parse).
+    fn json<T: DeserializeOwned>(&self, rel: &str) -> Result<Option<T>, RecordError> {
+        let path = self.dir.join(rel);
+        if !self.is_salvaging() {
+            return read_json(&path).map(Some);
+        }
+        let Some(bytes) = self.read_or_lose(rel)? else {
+            return Ok(None);
+        };
+        match serde_json::from_slice(&bytes) {
+            Ok(v) => Ok(Some(v)),
+            Err(e) => {
+                self.log(|l| l.set_lost_file(rel, Some(e.to_string())));
+                Ok(None)
+            }
+        }
+    }
+
+    /// All link records in file order (when salvaging: the whole ones; a lost `link.bin` reads as empty).
+    pub fn link_chunks(&self) -> Result<Vec<LinkChunk>, RecordError> {
+        let path = self.dir.join("link.bin");
+        if !self.is_salvaging() {
+            return parse_link(&read_file(&path)?, &path);
+        }
+        let Some(bytes) = self.read_or_lose("link.bin")? else {
+            return Ok(Vec::new());
+        };
+        let scan = scan_link(&bytes);
+        self.log(|l| l.set_stream("link.bin", scan.damage));
+        Ok(scan.chunks)
+    }
+
+    /// All frames of camera `camera`, in file order (when salvaging: the lines that parse; a lost
+    /// `frames.jsonl` reads as empty).
     pub fn frames(&self, camera: u8) -> Result<Vec<CameraFrame>, RecordError> {
         if !self.meta.cameras.iter().any(|c| c.id == camera) {
             return Err(RecordError::UnknownCamera { camera });
         }
-        let path = self.dir.join(camera_dir_name(camera)).join("frames.jsonl");
+        let rel = format!("{}/frames.jsonl", camera_dir_name(camera));
+        if self.is_salvaging() {
+            let check = |f: &CameraFrame| match &f.image {
+                Some(name) if !plain_image_name(name) => {
+                    Err(format!("image name {name:?} must be a plain file name"))
+                }
+                _ => Ok(()),
+            };
+            return Ok(self.jsonl(&rel, check)?.unwrap_or_default());
+        }
+        let path = self.dir.join(&rel);
         let frames: Vec<CameraFrame> = read_jsonl(&path)?;
         for (i, f) in frames.iter().enumerate() {
             if let Some(name) = &f.image {
-                let plain =
-                    !name.is_empty() && !name.contains(['/', '\\']) && name != "." && name != "..";
-                if !plain {
+                if !plain_image_name(name) {
                     return Err(RecordError::BadImageName {
                         path,
                         line: i + 1,
@@ -155,12 +276,13 @@ impl RecordingReader {
         Ok(frames)
     }
 
-    /// Reads the image of a frame (`None` if the frame has no image).
+    /// Reads the image of a frame (`None` if the frame has no image); a missing or bad image is an error, also
+    /// when salvaging (see [`RecordingReader::frame_image`]).
     pub fn image(&self, frame: &CameraFrame) -> Result<Option<GrayImage>, RecordError> {
         let Some(name) = &frame.image else {
             return Ok(None);
         };
-        if name.contains(['/', '\\']) || name == ".." {
+        if !plain_image_name(name) {
             return Err(RecordError::BadImageName {
                 path: self.dir.join(camera_dir_name(frame.camera)),
                 line: 0,
@@ -183,49 +305,85 @@ impl RecordingReader {
         Ok(Some(img))
     }
 
+    /// Reads the image of a frame. Strict: as [`RecordingReader::image`]. Salvaging: a missing or unreadable
+    /// image is logged (counted as missing or unreadable) and returned as [`FrameImage::Lost`].
+    pub fn frame_image(&self, frame: &CameraFrame) -> Result<FrameImage, RecordError> {
+        let key = (frame.camera, frame.index);
+        match self.image(frame) {
+            Ok(img) => {
+                self.log(|l| l.set_frame(key, None));
+                Ok(img.map_or(FrameImage::NoImage, FrameImage::Image))
+            }
+            Err(e) if self.is_salvaging() => {
+                let missing = matches!(&e, RecordError::Io { cause, .. }
+                    if cause.kind() == std::io::ErrorKind::NotFound);
+                let (loss, why) = if missing {
+                    (FrameLoss::Missing, "missing".to_string())
+                } else {
+                    (FrameLoss::Unreadable, unreadable_reason(&e))
+                };
+                let file = format!(
+                    "{}/{}",
+                    camera_dir_name(frame.camera),
+                    frame.image.as_deref().unwrap_or_default()
+                );
+                self.log(|l| l.set_frame(key, Some((file, loss, why))));
+                Ok(FrameImage::Lost)
+            }
+            Err(e) => Err(e),
+        }
+    }
+
     /// Whether the recording has ground truth.
     pub fn has_truth(&self) -> bool {
         self.meta.has_truth
     }
 
-    fn truth_path(&self, name: &str) -> Option<PathBuf> {
-        self.meta
-            .has_truth
-            .then(|| self.dir.join("truth").join(name))
+    fn truth_jsonl<T: DeserializeOwned>(&self, name: &str) -> Result<Option<Vec<T>>, RecordError> {
+        if !self.meta.has_truth {
+            return Ok(None);
+        }
+        self.jsonl(&format!("truth/{name}"), |_| Ok(()))
     }
 
-    /// Ground truth at every IMU sample (`None` without ground truth).
+    fn truth_json<T: DeserializeOwned>(&self, name: &str) -> Result<Option<T>, RecordError> {
+        if !self.meta.has_truth {
+            return Ok(None);
+        }
+        self.json(&format!("truth/{name}"))
+    }
+
+    /// Ground truth at every IMU sample (`None` without ground truth, or when salvaging a lost file).
     pub fn imu_truth(&self) -> Result<Option<Vec<ImuTruth>>, RecordError> {
-        self.truth_path("imu.jsonl")
-            .map(|p| read_jsonl(&p))
-            .transpose()
+        self.truth_jsonl("imu.jsonl")
     }
 
     /// Ground truth at every exposure of every camera.
     pub fn exposure_truth(&self) -> Result<Option<Vec<ExposureTruth>>, RecordError> {
-        self.truth_path("exposures.jsonl")
-            .map(|p| read_jsonl(&p))
-            .transpose()
+        self.truth_jsonl("exposures.jsonl")
     }
 
     /// Every packet the pen produced and its fate.
     pub fn packet_truth(&self) -> Result<Option<Vec<PacketTruth>>, RecordError> {
-        self.truth_path("packets.jsonl")
-            .map(|p| read_jsonl(&p))
-            .transpose()
+        self.truth_jsonl("packets.jsonl")
     }
 
     /// Stroke segmentation.
     pub fn strokes(&self) -> Result<Option<Vec<StrokeTruth>>, RecordError> {
-        self.truth_path("strokes.json")
-            .map(|p| read_json(&p))
-            .transpose()
+        self.truth_json("strokes.json")
     }
 
     /// Session-wide physical constants.
     pub fn world_truth(&self) -> Result<Option<WorldTruth>, RecordError> {
-        self.truth_path("world.json")
-            .map(|p| read_json(&p))
-            .transpose()
+        self.truth_json("world.json")
+    }
+}
+
+/// The error's message without the path (the damage log names the file already).
+fn unreadable_reason(e: &RecordError) -> String {
+    match e {
+        RecordError::Io { cause, .. } => cause.to_string(),
+        RecordError::BadImage { reason, .. } => reason.clone(),
+        other => other.to_string(),
     }
 }

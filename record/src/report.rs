@@ -8,6 +8,8 @@
 use std::path::PathBuf;
 
 use fires_protocol::DecoderStats;
+
+use crate::Damage;
 use serde::{Deserialize, Serialize};
 
 /// The `format` value of a report.
@@ -61,6 +63,8 @@ pub struct ReplayReport {
     pub stage_ms: StageMs,
     /// Wall time of the whole run, milliseconds.
     pub wall_ms: f64,
+    /// What a damaged recording lost (empty for an intact one; docs/recording.md, "Damaged recordings").
+    pub damaged: Damage,
     /// Tip accuracy against the ground truth.
     #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
     pub accuracy: Option<Accuracy>,
@@ -200,6 +204,8 @@ pub struct BarReport {
     pub recording: PathBuf,
     /// The temporal filter behind the headline figures.
     pub bar_smoothing: BarSmoothing,
+    /// What a damaged recording lost (empty for an intact one).
+    pub damaged: Damage,
     /// The headline figures: midpoint triangulation.
     #[serde(flatten)]
     pub headline: BarMethod,

@@ -92,6 +92,7 @@ fn a_bar_report_reads_back_equal_and_another_version_is_refused() {
         version: fires_record::REPORT_VERSION.into(),
         recording: "rec".into(),
         bar_smoothing: BarSmoothing::default(),
+        damaged: fires_record::Damage::default(),
         headline: method.clone(),
         method_midpoint: method.clone(),
         method_linear: method.clone(),

@@ -20,8 +20,8 @@ pub use session::{run, run_scenario, SimOptions, SimSummary, HOST_ORIGIN_NS};
 /// Errors of the simulator.
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
-    /// No scenario of that name.
-    #[error("unknown scenario {0:?} (known: fires-v1, fires-v2, bar, tip, stress)")]
+    /// No scenario of that name; the message lists the names of [`SCENARIOS`].
+    #[error("unknown scenario {0:?} (known: {known})", known = scenario::scenario_names())]
     UnknownScenario(String),
     /// Duration not positive and finite (or longer than a day).
     #[error("bad duration {0} s: must be positive, finite and at most 86400")]

@@ -16,7 +16,8 @@ use fires_protocol::ScaleFactors;
 use fires_record::{CalibratedCamera, CameraModel, Extrinsics, PenGeometry};
 use nalgebra::{Matrix3, Rotation3};
 
-/// The scenario names and one-line descriptions.
+/// The scenario names and one-line descriptions: the one list of scenarios ([`scenario`] builds exactly
+/// these, error messages and help texts list them from here).
 pub const SCENARIOS: &[(&str, &str)] = &[
     ("fires-v1", "two Wii-remote-like IR blob cameras: 1024x768, 45 deg hFOV, 100 Hz, parallel, 0.25 m baseline; pen draws a curve network on a sphere"),
     ("fires-v2", "Minoru-like stereo webcam: 640x480 8-bit images, 15 Hz, 6 cm baseline; pen draws a curve network on a freeform blob"),
@@ -25,6 +26,15 @@ pub const SCENARIOS: &[(&str, &str)] = &[
     ("stress", "fires-v2 rig with a box: hand occlusion, reflections, sunlight, link faults with a disconnect, fast motion"),
     ("pivot", "tip pivot calibration on the fires-v1 rig: the tip held on one point 0.7 m away while the pen sweeps a 35 deg cone and rolls"),
 ];
+
+/// The names of [`SCENARIOS`], comma-separated.
+pub fn scenario_names() -> String {
+    SCENARIOS
+        .iter()
+        .map(|(name, _)| *name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
 
 /// Rig pitch below the horizontal, radians.
 const RIG_PITCH: f64 = 15.0 * std::f64::consts::PI / 180.0;
@@ -266,6 +276,9 @@ pub fn scenario(
     duration_s: f64,
     object: Option<ObjectKind>,
 ) -> Result<Scenario, SimError> {
+    if !SCENARIOS.iter().any(|(n, _)| *n == name) {
+        return Err(SimError::UnknownScenario(name.to_string()));
+    }
     let mut rng = SimRng::stream(seed, 0);
     let imu = imu_config(&mut rng);
     let pen_clock_drift_ppm = rng.range(-50.0, 50.0);
@@ -386,6 +399,7 @@ pub fn scenario(
             },
             LinkConfig::clean(),
         ),
+        // Listed in SCENARIOS but not built here: a bug, caught by the api test that builds every listed name.
         other => return Err(SimError::UnknownScenario(other.to_string())),
     };
     Ok(sc)

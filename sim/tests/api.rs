@@ -26,6 +26,22 @@ fn bad_arguments_are_typed_errors() {
 }
 
 #[test]
+fn unknown_scenario_error_lists_every_scenario() {
+    let dir = tempfile::tempdir().unwrap();
+    let err =
+        run_scenario("nope", 1, 1.0, dir.path(), SimOptions::default()).expect_err("unknown name");
+    let msg = err.to_string();
+    assert!(msg.contains("\"nope\""), "{msg}");
+    let listed = msg
+        .split_once("(known: ")
+        .and_then(|(_, rest)| rest.strip_suffix(')'))
+        .unwrap_or_else(|| panic!("no list in {msg}"));
+    let names: Vec<&str> = SCENARIOS.iter().map(|(n, _)| *n).collect();
+    assert_eq!(listed.split(", ").collect::<Vec<_>>(), names);
+    assert!(names.contains(&"pivot"), "{names:?}");
+}
+
+#[test]
 fn every_scenario_runs_and_says_what_its_cameras_provide() {
     for (name, _) in SCENARIOS {
         for images in [true, false] {

@@ -295,6 +295,7 @@ pub fn bar_experiment(reader: &RecordingReader) -> Result<BarExperiment, ReplayE
             version: REPORT_VERSION.into(),
             recording: reader.dir().to_path_buf(),
             bar_smoothing: smoothing,
+            damaged: reader.damage(),
             headline: midpoint.clone(),
             method_midpoint: midpoint,
             method_linear: linear,

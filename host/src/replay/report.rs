@@ -233,6 +233,7 @@ pub fn replay_report(
             strokes: t.strokes_ns as f64 / 1e6,
         },
         wall_ms: out.wall_ns as f64 / 1e6,
+        damaged: out.damage.clone(),
         accuracy: None,
         realtime_factor: None,
         tip_error_plot: None,

@@ -2,10 +2,10 @@
 
 use std::time::Instant;
 
-use fires_record::{FrameContent, RecordError, RecordingReader};
+use fires_record::{Damage, FrameContent, FrameImage, RecordError, RecordingReader};
 
 use super::imu_stream::{imu_stream, ImuStream};
-use crate::meta::{imu_scale, pen_geometry, stereo_rig, MetaError};
+use crate::meta::{checked_pen_geometry, imu_scale, stereo_rig, MetaError};
 
 use crate::session::{Session, StrokeConfig};
 use crate::stereo::CameraId;
@@ -113,6 +113,8 @@ pub struct ReplayOutput {
     pub world_fit: Option<(u64, WorldFit)>,
     /// The magnetometer's hard-iron offset, when the session calibrated it.
     pub mag_offset: Option<MagOffset>,
+    /// What the reads of the replay skipped (a salvaging reader's log; clean for a strict reader).
+    pub damage: Damage,
 }
 
 /// The latest frame of a camera: its index and blob positions.
@@ -132,7 +134,9 @@ impl Event {
     }
 }
 
-/// Replays a recording through the tracker.
+/// Replays a recording through the tracker. With a reader from [`RecordingReader::open_salvaging`] a damaged
+/// recording replays as far as it is whole: a frame whose image is lost is skipped (the tracker sees a gap,
+/// not an empty frame) and [`ReplayOutput::damage`] says what was skipped.
 pub fn replay(
     reader: &RecordingReader,
     config: &ReplayConfig,
@@ -150,7 +154,7 @@ pub fn replay(
     times.link_ns = t.elapsed().as_nanos() as u64;
 
     let mut tracker_cfg = config.tracker.clone();
-    tracker_cfg.pen = pen_geometry(meta)?;
+    tracker_cfg.pen = checked_pen_geometry(meta, tracker_cfg.identify.tolerance)?;
     let truth = match config.world {
         WorldSource::Truth => reader.world_truth()?,
         WorldSource::Estimate => None,
@@ -217,6 +221,9 @@ pub fn replay(
                     config,
                 )?;
                 times.blobs_ns += t.elapsed().as_nanos() as u64;
+                let Some(frame) = frame else {
+                    continue;
+                };
                 last[id as usize] = Some((f.index, frame.blobs.clone()));
                 let t = Instant::now();
                 if let Some(s) = session.frame(frame) {
@@ -245,6 +252,7 @@ pub fn replay(
         world_reference,
         world_fit,
         mag_offset,
+        damage: reader.damage(),
     })
 }
 
@@ -283,7 +291,8 @@ pub fn world_reference(w: &fires_record::WorldTruth) -> WorldReference {
     }
 }
 
-/// The blobs of one recorded frame: the device's list, or detection on the image around the predicted LEDs.
+/// The blobs of one recorded frame: the device's list, or detection on the image around the predicted LEDs;
+/// `None` when its image is lost (salvaging reader).
 fn camera_frame(
     reader: &RecordingReader,
     f: &fires_record::CameraFrame,
@@ -292,21 +301,25 @@ fn camera_frame(
     detectors: &mut [BlobDetector; 2],
     tracker: &Tracker,
     config: &ReplayConfig,
-) -> Result<CameraFrame, ReplayError> {
+) -> Result<Option<CameraFrame>, ReplayError> {
     if !is_image {
         let blobs = f.blobs.as_deref().unwrap_or_default();
-        return Ok(CameraFrame {
+        return Ok(Some(CameraFrame {
             camera: id,
             t_ns: f.exposure_time_ns,
             blobs: blobs.iter().map(|b| [b.x, b.y]).collect(),
-        });
+        }));
     }
-    let Some(img) = reader.image(f)? else {
-        return Ok(CameraFrame {
-            camera: id,
-            t_ns: f.exposure_time_ns,
-            blobs: Vec::new(),
-        });
+    let img = match reader.frame_image(f)? {
+        FrameImage::Image(img) => img,
+        FrameImage::NoImage => {
+            return Ok(Some(CameraFrame {
+                camera: id,
+                t_ns: f.exposure_time_ns,
+                blobs: Vec::new(),
+            }))
+        }
+        FrameImage::Lost => return Ok(None),
     };
     let blobs = match GrayImage::new(img.width as usize, img.height as usize, &img.data) {
         Ok(view) => {
@@ -315,5 +328,9 @@ fn camera_frame(
         }
         Err(_) => Vec::new(),
     };
-    Ok(CameraFrame::from_blobs(id, f.exposure_time_ns, &blobs))
+    Ok(Some(CameraFrame::from_blobs(
+        id,
+        f.exposure_time_ns,
+        &blobs,
+    )))
 }

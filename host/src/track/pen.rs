@@ -12,6 +12,9 @@ pub const LED_COUNT: usize = 4;
 /// Invalid pen geometry.
 #[derive(Debug, Clone, Copy, PartialEq, Error)]
 pub enum PenError {
+    /// An LED offset or the tip offset is not a finite number.
+    #[error("LED and tip offsets must be finite numbers")]
+    NotFinite,
     /// LED offsets must start at 0 and increase strictly.
     #[error("LED offsets must be 0 followed by strictly increasing values")]
     NotIncreasing,
@@ -56,9 +59,14 @@ impl PenGeometry {
         [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
     }
 
-    /// Checks the geometry can be identified by distances with matching tolerance `tolerance`.
+    /// Checks the geometry can be identified by distances with matching tolerance `tolerance`
+    /// ([`super::identify::IdentifyConfig::tolerance`]): finite offsets, LED offsets 0 then strictly
+    /// increasing, and no two of the six pairwise distances closer than `2 * tolerance`.
     pub fn validate(&self, tolerance: f64) -> Result<(), PenError> {
         let l = &self.led_offsets;
+        if !self.tip_offset.is_finite() || l.iter().any(|v| !v.is_finite()) {
+            return Err(PenError::NotFinite);
+        }
         if l[0] != 0.0 || !l.windows(2).all(|w| w[1] > w[0]) {
             return Err(PenError::NotIncreasing);
         }
@@ -108,6 +116,9 @@ mod tests {
     fn thesis_pen_is_identifiable_below_5mm() {
         let pen = PenGeometry::thesis();
         assert!(pen.validate(0.0049).is_ok());
+        let mut inf = pen;
+        inf.led_offsets[3] = f64::INFINITY;
+        assert_eq!(inf.validate(0.0049), Err(PenError::NotFinite));
         assert!(matches!(
             pen.validate(0.0051),
             Err(PenError::DistancesTooClose(..))
