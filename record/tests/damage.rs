@@ -1,41 +1,19 @@
 //! A salvaging reader keeps what is whole of a damaged recording and says what it skipped; a strict reader
 //! refuses the same damage.
 
+mod common;
+use common::test_meta;
 use fires_record::salvage::scan_link;
 use fires_record::*;
 use std::fs;
 use std::path::Path;
 
 fn meta() -> Meta {
-    let cam = CalibratedCamera {
-        intrinsics: CameraModel::from_hfov(8, 6, 1.0),
-        extrinsics: Extrinsics::IDENTITY,
-    };
-    let mut right = cam;
-    right.extrinsics.translation_m = [-0.1, 0.0, 0.0];
-    Meta::new(
-        Source {
-            kind: "test".into(),
-            scenario: None,
-            seed: None,
-            generator: None,
-        },
-        RigCalibration {
-            cameras: vec![cam, right],
-        },
-        PenGeometry::fires_default(),
-        vec![
-            CameraStream {
-                id: 0,
-                provides: FrameContent::Images,
-                nominal_rate_hz: 15.0,
-            },
-            CameraStream {
-                id: 1,
-                provides: FrameContent::Blobs,
-                nominal_rate_hz: 15.0,
-            },
-        ],
+    test_meta(
+        (8, 6),
+        0.1,
+        &[FrameContent::Images, FrameContent::Blobs],
+        None,
         true,
     )
 }

@@ -7,6 +7,8 @@
 
 #![cfg(unix)]
 
+mod common;
+use common::test_meta;
 use fires_record::*;
 use std::io::{BufRead, BufReader, Write};
 use std::path::Path;
@@ -16,30 +18,7 @@ use std::time::{Duration, Instant};
 const ENV: &str = "FIRES_KILLED_WRITER_DIR";
 
 fn meta() -> Meta {
-    let cam = CalibratedCamera {
-        intrinsics: CameraModel::from_hfov(16, 12, 1.0),
-        extrinsics: Extrinsics::IDENTITY,
-    };
-    let mut right = cam;
-    right.extrinsics.translation_m = [-0.06, 0.0, 0.0];
-    Meta::new(
-        Source {
-            kind: "test".into(),
-            scenario: None,
-            seed: None,
-            generator: None,
-        },
-        RigCalibration {
-            cameras: vec![cam, right],
-        },
-        PenGeometry::fires_default(),
-        vec![CameraStream {
-            id: 0,
-            provides: FrameContent::Images,
-            nominal_rate_hz: 15.0,
-        }],
-        true,
-    )
+    test_meta((16, 12), 0.06, &[FrameContent::Images], None, true)
 }
 
 /// Link record `i`: time `10 i` ns, `i % 97 + 1` bytes derived from `i`.

@@ -1,33 +1,12 @@
 //! `meta.json` that parses but describes an impossible rig or pen is refused on load, naming the field.
 
+mod common;
+use common::test_meta;
 use fires_record::*;
 use std::fs;
 
 fn meta() -> Meta {
-    let cam = CalibratedCamera {
-        intrinsics: CameraModel::from_hfov(64, 48, 1.0),
-        extrinsics: Extrinsics::IDENTITY,
-    };
-    let mut right = cam;
-    right.extrinsics.translation_m = [-0.06, 0.0, 0.0];
-    Meta::new(
-        Source {
-            kind: "test".into(),
-            scenario: None,
-            seed: None,
-            generator: None,
-        },
-        RigCalibration {
-            cameras: vec![cam, right],
-        },
-        PenGeometry::fires_default(),
-        vec![CameraStream {
-            id: 0,
-            provides: FrameContent::Blobs,
-            nominal_rate_hz: 15.0,
-        }],
-        false,
-    )
+    test_meta((64, 48), 0.06, &[FrameContent::Blobs], None, false)
 }
 
 /// Writes a valid recording, then replaces `meta.json` with `edit(meta)` and opens it.
