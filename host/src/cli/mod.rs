@@ -4,6 +4,7 @@ pub mod bench;
 pub mod calibrate;
 pub mod decode;
 pub mod demo;
+pub mod mesh;
 pub mod pivot;
 pub mod replay;
 pub mod sim;
