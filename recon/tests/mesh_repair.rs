@@ -69,7 +69,9 @@ fn rows_sum_to_zero(c: &fires_recon::solve::SparseMatrix) -> bool {
         sum[i] += v;
         scale[i] = scale[i].max(v.abs());
     }
-    sum.iter().zip(&scale).all(|(s, m)| s.abs() <= 1e-12 * m.max(1.0))
+    sum.iter()
+        .zip(&scale)
+        .all(|(s, m)| s.abs() <= 1e-12 * m.max(1.0))
 }
 
 #[test]
@@ -92,7 +94,10 @@ fn quad_mesh_reads_with_counts_and_its_cotan_is_that_of_its_triangulation() {
     let cq = sparse_triplets(c.as_ref());
     assert_eq!(cq.len(), ct.len());
     for ((i, j, a), (k, l, b)) in cq.iter().zip(&ct) {
-        assert!((i, j) == (k, l) && (a - b).abs() < 1e-13, "({i},{j}): {a} vs {b}");
+        assert!(
+            (i, j) == (k, l) && (a - b).abs() < 1e-13,
+            "({i},{j}): {a} vs {b}"
+        );
     }
     assert!(rows_sum_to_zero(&c));
     let timings = bench_solve_matrix(&laplacian_system(&q).unwrap(), 1, faer::Par::Seq).unwrap();
@@ -122,7 +127,12 @@ fn planar_quad_grid_laplacian_has_linear_precision() {
     }
     for v in m.vertices() {
         if !m.is_boundary_vertex(v) {
-            assert!(cx[v.idx()].abs() < 1e-12, "row {} gives {}", v.idx(), cx[v.idx()]);
+            assert!(
+                cx[v.idx()].abs() < 1e-12,
+                "row {} gives {}",
+                v.idx(),
+                cx[v.idx()]
+            );
         }
     }
 }
@@ -131,7 +141,12 @@ fn planar_quad_grid_laplacian_has_linear_precision() {
 fn mixed_polygon_mesh_reads_counts_and_runs_the_laplacian() {
     let soup = mixed_polygon_soup();
     let path = tmp("mixed.ply");
-    write_ply(std::fs::File::create(&path).unwrap(), &soup, PlyEncoding::Ascii).unwrap();
+    write_ply(
+        std::fs::File::create(&path).unwrap(),
+        &soup,
+        PlyEncoding::Ascii,
+    )
+    .unwrap();
     let (m, repairs) = read_mesh_file_repaired(&path).unwrap();
     assert!(repairs.is_clean(), "{repairs:?}");
     let info = mesh_info(&m, &repairs);
@@ -166,7 +181,11 @@ fn signed_volume(m: &SurfaceMesh) -> f64 {
 
 #[test]
 fn shuffled_orientation_comes_back_consistent() {
-    for original in [icosphere(2, 1.0), uv_sphere(10, 6, 1.0, true), torus(2.0, 0.6, 12, 8, false)] {
+    for original in [
+        icosphere(2, 1.0),
+        uv_sphere(10, 6, 1.0, true),
+        torus(2.0, 0.6, 12, 8, false),
+    ] {
         let soup = PolygonSoup::from_mesh(&original);
         let mut faces: Vec<Vec<usize>> = soup.faces().map(<[usize]>::to_vec).collect();
         let mut flipped = 0;
@@ -179,8 +198,14 @@ fn shuffled_orientation_comes_back_consistent() {
         let (m, r) = repaired(&soup.points, &faces);
         assert_eq!(r.flipped_faces, flipped);
         assert_eq!(r.non_orientable_components, 0);
-        assert!(m.is_closed(), "an edge kept two faces traversing it the same way");
-        assert_eq!((m.n_vertices(), m.n_edges()), (original.n_vertices(), original.n_edges()));
+        assert!(
+            m.is_closed(),
+            "an edge kept two faces traversing it the same way"
+        );
+        assert_eq!(
+            (m.n_vertices(), m.n_edges()),
+            (original.n_vertices(), original.n_edges())
+        );
         // Every face has its original cyclic order back.
         for (f, g) in m.faces().zip(original.faces()) {
             let a: Vec<Vertex> = m.face_vertices(f).collect();
@@ -212,7 +237,13 @@ fn bow_tie_vertex_is_split_with_file_indices_kept() {
     ]
     .map(|(x, y, z)| Vec3::new(x, y, z))
     .to_vec();
-    let faces = vec![vec![0, 1, 2], vec![0, 2, 3], vec![0, 3, 4], vec![0, 5, 6], vec![0, 6, 7]];
+    let faces = vec![
+        vec![0, 1, 2],
+        vec![0, 2, 3],
+        vec![0, 3, 4],
+        vec![0, 5, 6],
+        vec![0, 6, 7],
+    ];
     let soup = {
         let mut s = PolygonSoup::new();
         s.points = pts.clone();
@@ -223,10 +254,16 @@ fn bow_tie_vertex_is_split_with_file_indices_kept() {
     };
     let path = tmp("bowtie.off");
     write_off(std::fs::File::create(&path).unwrap(), &soup).unwrap();
-    assert!(soup.to_mesh().is_err(), "the strict builder must refuse the bow-tie");
+    assert!(
+        soup.to_mesh().is_err(),
+        "the strict builder must refuse the bow-tie"
+    );
     let (m, r) = read_mesh_file_repaired(&path).unwrap();
     m.validate().unwrap();
-    assert_eq!((r.non_manifold_vertices_split, r.vertex_copies_added), (1, 1));
+    assert_eq!(
+        (r.non_manifold_vertices_split, r.vertex_copies_added),
+        (1, 1)
+    );
     assert_eq!(r.vertex_source, vec![0]);
     assert_eq!(m.n_vertices(), 9);
     for (i, p) in pts.iter().enumerate() {
@@ -234,26 +271,42 @@ fn bow_tie_vertex_is_split_with_file_indices_kept() {
     }
     assert_eq!(m.position(Vertex::new(8)), pts[0]);
     // The first fan keeps vertex 0, the second uses the copy; other indices unchanged.
-    let lists: Vec<Vec<usize>> = m.face_index_lists().into_iter().map(rotated_to_min).collect();
+    let lists: Vec<Vec<usize>> = m
+        .face_index_lists()
+        .into_iter()
+        .map(rotated_to_min)
+        .collect();
     let expect: Vec<Vec<usize>> = [[0, 1, 2], [0, 2, 3], [0, 3, 4], [8, 5, 6], [8, 6, 7]]
         .map(|f| rotated_to_min(f.to_vec()))
         .to_vec();
     assert_eq!(lists, expect);
     let info = mesh_info(&m, &r);
     assert!(!info.manifold);
-    assert_eq!((info.components, info.boundary_loops, info.genus), (2, 2, 0));
+    assert_eq!(
+        (info.components, info.boundary_loops, info.genus),
+        (2, 2, 0)
+    );
 }
 
 #[test]
 fn third_face_on_an_edge_is_detached_on_its_own_vertices() {
-    let pts: Vec<Vec3> = [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.5, 1.0, 0.0), (0.5, -1.0, 0.0), (0.5, 0.0, 1.0)]
-        .map(|(x, y, z)| Vec3::new(x, y, z))
-        .to_vec();
+    let pts: Vec<Vec3> = [
+        (0.0, 0.0, 0.0),
+        (1.0, 0.0, 0.0),
+        (0.5, 1.0, 0.0),
+        (0.5, -1.0, 0.0),
+        (0.5, 0.0, 1.0),
+    ]
+    .map(|(x, y, z)| Vec3::new(x, y, z))
+    .to_vec();
     let faces = vec![vec![0, 1, 2], vec![1, 0, 3], vec![0, 1, 4]];
     let (m, r) = repaired(&pts, &faces);
     assert_eq!((r.detached_faces, r.vertex_copies_added), (1, 3));
     assert_eq!(r.vertex_source, vec![0, 1, 4]);
-    assert_eq!(rotated_to_min(m.face_index_lists()[2].clone()), vec![5, 6, 7]);
+    assert_eq!(
+        rotated_to_min(m.face_index_lists()[2].clone()),
+        vec![5, 6, 7]
+    );
     assert_eq!((m.n_faces(), m.n_vertices()), (3, 8));
     // Vertex 4 is now only used through its copy.
     assert!(m.is_isolated(Vertex::new(4)));
@@ -271,7 +324,9 @@ fn moebius(n: usize) -> (Vec<Vec3>, Vec<Vec<usize>>) {
         }
     }
     let (a, b) = (|i: usize| 2 * i, |i: usize| 2 * i + 1);
-    let mut faces: Vec<Vec<usize>> = (0..n - 1).map(|i| vec![a(i), a(i + 1), b(i + 1), b(i)]).collect();
+    let mut faces: Vec<Vec<usize>> = (0..n - 1)
+        .map(|i| vec![a(i), a(i + 1), b(i + 1), b(i)])
+        .collect();
     faces.push(vec![a(n - 1), b(0), a(0), b(n - 1)]);
     (pts, faces)
 }
@@ -286,7 +341,10 @@ fn moebius_strip_is_reported_non_orientable_and_cut_open() {
     assert!(!info.orientable);
     assert_eq!(m.n_faces(), 12);
     // Cut along one rung: a disk (χ = 1, one boundary loop).
-    assert_eq!((info.euler_characteristic, info.boundary_loops, info.genus), (1, 1, 0));
+    assert_eq!(
+        (info.euler_characteristic, info.boundary_loops, info.genus),
+        (1, 1, 0)
+    );
     // An orientable annulus with the same layout is not reported.
     let mut annulus = faces.clone();
     annulus.pop();
@@ -357,7 +415,11 @@ fn every_component_gets_a_fixed_vertex_and_an_unfixed_one_is_named() {
         for f in a.faces() {
             faces.push(f.iter().map(|i| i + shift).collect());
         }
-        pts.extend(a.points.iter().map(|&p| p + Vec3::new(shift as f64, 0.0, 0.0)));
+        pts.extend(
+            a.points
+                .iter()
+                .map(|&p| p + Vec3::new(shift as f64, 0.0, 0.0)),
+        );
     }
     pts.push(Vec3::new(0.0, 5.0, 0.0));
     let (m, _) = repaired(&pts, &faces);
@@ -370,7 +432,10 @@ fn every_component_gets_a_fixed_vertex_and_an_unfixed_one_is_named() {
     only_first[24] = true;
     only_first[36] = true;
     match diagnose_laplacian_system(&m, &only_first) {
-        Some(BenchError::UnfixedComponent { vertices, first_vertex }) => {
+        Some(BenchError::UnfixedComponent {
+            vertices,
+            first_vertex,
+        }) => {
             assert_eq!((vertices, first_vertex), (12, 12))
         }
         other => panic!("{other:?}"),
@@ -389,7 +454,10 @@ fn genus_and_components_of_generated_meshes() {
     ];
     for (m, genus, loops) in cases {
         let info = mesh_info(&m, &Repairs::default());
-        assert_eq!((info.genus, info.boundary_loops, info.components), (genus, loops, 1));
+        assert_eq!(
+            (info.genus, info.boundary_loops, info.components),
+            (genus, loops, 1)
+        );
         assert_eq!(info.euler_characteristic, m.euler_characteristic());
     }
     // Sphere + torus in one file: two components, total genus 1.
@@ -398,10 +466,16 @@ fn genus_and_components_of_generated_meshes() {
     let mut pts = s.points.clone();
     pts.extend(&t.points);
     let mut faces: Vec<Vec<usize>> = s.faces().map(<[usize]>::to_vec).collect();
-    faces.extend(t.faces().map(|f| f.iter().map(|i| i + s.points.len()).collect::<Vec<_>>()));
+    faces.extend(
+        t.faces()
+            .map(|f| f.iter().map(|i| i + s.points.len()).collect::<Vec<_>>()),
+    );
     let (m, r) = repaired(&pts, &faces);
     let info = mesh_info(&m, &r);
-    assert_eq!((info.components, info.genus, info.euler_characteristic), (2, 1, 2));
+    assert_eq!(
+        (info.components, info.genus, info.euler_characteristic),
+        (2, 1, 2)
+    );
     let json = serde_json::to_string(&info).unwrap();
     assert!(json.contains("\"genus\":1") && json.contains("\"repairs\":{"));
 }

@@ -5,7 +5,8 @@
 //! by Liepa, *Filling holes in meshes*, SGP 2003, §3, and by pmp-library's
 //! `triangulate`): the weight of a triangle is its area plus `1e-3·Σℓ²` of its edges, so
 //! a planar convex polygon (where every triangulation has the same area) is split along
-//! its shorter diagonals. A diagonal that is already an edge of the mesh (or of an
+//! its shorter diagonals; a zero-area triangle weighs `1e6·Σℓ²`, so collinear corners
+//! (T-junctions) are not joined when another triangulation exists. A diagonal that is already an edge of the mesh (or of an
 //! earlier face's triangulation) is not used when avoidable, so [`triangulate`] returns a
 //! manifold mesh. Faces of more than [`MAX_DP_DEGREE`] vertices are fan-triangulated from
 //! their first vertex (the O(n³) program would be too slow).
@@ -18,7 +19,7 @@
 use std::collections::HashSet;
 
 use super::OperatorError;
-use crate::geometry::{triangle_area, Vec3};
+use crate::geometry::{is_degenerate_triangle, triangle_area, Vec3};
 use crate::mesh::{SurfaceMesh, Vertex};
 
 /// Largest face degree triangulated by dynamic programming.
@@ -26,6 +27,10 @@ pub const MAX_DP_DEGREE: usize = 64;
 
 /// Weight of the squared edge lengths in the triangle weight (tie-breaker).
 const EDGE_WEIGHT: f64 = 1e-3;
+
+/// Weight of the squared edge lengths of a zero-area triangle: avoided whenever the
+/// polygon has another triangulation (e.g. three collinear corners of a T-junction).
+const DEGENERATE_WEIGHT: f64 = 1e6;
 
 /// Every face as triangles of vertex indices (triangles as they are, polygons
 /// triangulated as the module docs describe), in face order.
@@ -90,9 +95,13 @@ pub fn triangulate_polygon(
         |i: usize, j: usize| j == i + 1 || (i == 0 && j == n - 1) || !taken(poly[i], poly[j]);
     let weight = |i: usize, k: usize, j: usize| {
         let (a, b, c) = (p(i), p(k), p(j));
-        triangle_area(a, b, c)
-            + EDGE_WEIGHT
-                * ((b - a).norm_squared() + (c - b).norm_squared() + (a - c).norm_squared())
+        let l2 = (b - a).norm_squared() + (c - b).norm_squared() + (a - c).norm_squared();
+        let penalty = if is_degenerate_triangle(a, b, c) {
+            DEGENERATE_WEIGHT
+        } else {
+            EDGE_WEIGHT
+        };
+        triangle_area(a, b, c) + penalty * l2
     };
     let idx = |i: usize, j: usize| i * n + j;
     let mut cost = vec![f64::INFINITY; n * n];

@@ -4,7 +4,7 @@
 
 use std::collections::{HashSet, VecDeque};
 
-use super::{edge_uses, EdgeKey};
+use super::{edge_key, edge_uses, EdgeKey};
 
 /// Result of [`orient_faces`].
 pub(super) struct Orientation {
@@ -23,12 +23,23 @@ pub(super) struct Orientation {
 pub(super) fn orient_faces(faces: &mut [Vec<usize>], active: &[bool]) -> Orientation {
     let uses = edge_uses(faces, active);
     // Adjacency through edges with exactly two active faces: (neighbour, same_direction).
+    // Built in face and corner order so the traversal (and any cut) is deterministic.
     let mut adj: Vec<Vec<(usize, bool, EdgeKey)>> = vec![Vec::new(); faces.len()];
-    for (&key, u) in &uses {
-        if u.n == 2 {
-            let same = u.fwd[0] == u.fwd[1];
-            adj[u.face[0]].push((u.face[1], same, key));
-            adj[u.face[1]].push((u.face[0], same, key));
+    for (fi, f) in faces.iter().enumerate() {
+        if !active[fi] {
+            continue;
+        }
+        let n = f.len();
+        for k in 0..n {
+            let key = edge_key(f[k], f[(k + 1) % n]);
+            if let Some(u) = uses.get(&key).filter(|u| u.n == 2) {
+                let other = if u.face[0] == fi {
+                    u.face[1]
+                } else {
+                    u.face[0]
+                };
+                adj[fi].push((other, u.fwd[0] == u.fwd[1], key));
+            }
         }
     }
     let mut flip: Vec<Option<bool>> = vec![None; faces.len()];
