@@ -1,9 +1,7 @@
 //! Face cleaning before the halfedge build: index checks, repeated corners, degenerate
 //! and duplicate faces, zero-area faces.
 
-use std::collections::HashSet;
-
-use super::Repairs;
+use super::{IndexSet, Repairs};
 use crate::geometry::Vec3;
 use crate::mesh::MeshError;
 
@@ -26,7 +24,7 @@ pub(super) fn clean_faces<'a>(
         faces: Vec::new(),
         source: Vec::new(),
     };
-    let mut seen: HashSet<Vec<usize>> = HashSet::new();
+    let mut seen: IndexSet<Vec<usize>> = IndexSet::default();
     let mut sorted = Vec::new();
     for (fi, face) in faces.enumerate() {
         if let Some(&index) = face.iter().find(|&&i| i >= n_points) {

@@ -129,6 +129,35 @@ impl Default for RepairOptions {
     }
 }
 
+/// A fast non-cryptographic hasher for the index keys of the repair maps (the
+/// multiply-rotate hash of rustc's `FxHasher`); the keys are not attacker-chosen hashes
+/// of secrets, and worst-case collisions only cost time.
+#[derive(Default, Clone, Copy)]
+pub(super) struct IndexHasher(u64);
+
+impl std::hash::Hasher for IndexHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_usize(&mut self, i: usize) {
+        self.write_u64(i as u64);
+    }
+}
+
+/// Hash map with [`IndexHasher`].
+pub(super) type IndexMap<K, V> = HashMap<K, V, std::hash::BuildHasherDefault<IndexHasher>>;
+/// Hash set with [`IndexHasher`].
+pub(super) type IndexSet<K> =
+    std::collections::HashSet<K, std::hash::BuildHasherDefault<IndexHasher>>;
+
 /// Undirected edge key `(min, max)`.
 pub(super) type EdgeKey = (usize, usize);
 
@@ -146,8 +175,9 @@ pub(super) struct EdgeUse {
 }
 
 /// Faces per undirected edge (active faces only; a third face is ignored).
-pub(super) fn edge_uses(faces: &[Vec<usize>], active: &[bool]) -> HashMap<EdgeKey, EdgeUse> {
-    let mut uses: HashMap<EdgeKey, EdgeUse> = HashMap::with_capacity(faces.len() * 2);
+pub(super) fn edge_uses(faces: &[Vec<usize>], active: &[bool]) -> IndexMap<EdgeKey, EdgeUse> {
+    let mut uses: IndexMap<EdgeKey, EdgeUse> = IndexMap::default();
+    uses.reserve(faces.len() * 2);
     for (fi, f) in faces.iter().enumerate() {
         if !active[fi] {
             continue;

@@ -2,9 +2,9 @@
 //! manifold edges, as in Botsch et al., *Polygon Mesh Processing*, §1.4 / the
 //! `orient_polygon_soup` step of CGAL), with non-orientable components detected.
 
-use std::collections::{HashSet, VecDeque};
+use std::collections::VecDeque;
 
-use super::{edge_key, edge_uses, EdgeKey};
+use super::{edge_key, edge_uses, EdgeKey, IndexSet};
 
 /// Result of [`orient_faces`].
 pub(super) struct Orientation {
@@ -14,7 +14,7 @@ pub(super) struct Orientation {
     pub(super) non_orientable: usize,
     /// Edges joining two faces that still traverse them the same way (the cuts that make
     /// a non-orientable component orientable).
-    pub(super) cut: HashSet<EdgeKey>,
+    pub(super) cut: IndexSet<EdgeKey>,
 }
 
 /// Reverses faces so that every edge shared by two active faces is traversed in opposite
@@ -46,7 +46,7 @@ pub(super) fn orient_faces(faces: &mut [Vec<usize>], active: &[bool]) -> Orienta
     let mut out = Orientation {
         flipped: 0,
         non_orientable: 0,
-        cut: HashSet::new(),
+        cut: IndexSet::default(),
     };
     let mut queue = VecDeque::new();
     let mut component = Vec::new();

@@ -7,14 +7,13 @@
 //!   and gets one appended copy per further fan (CGAL's
 //!   `duplicate_non_manifold_vertices`), so the file's vertex indices stay valid.
 
-use std::collections::{HashMap, HashSet};
-
-use super::{edge_key, EdgeKey};
+use super::{edge_key, EdgeKey, IndexMap, IndexSet};
 
 /// Marks inactive every face (in file order) that would give one of its edges a third
 /// active face. Returns how many were marked.
 pub(super) fn deactivate_complex_edge_faces(faces: &[Vec<usize>], active: &mut [bool]) -> usize {
-    let mut count: HashMap<EdgeKey, u8> = HashMap::with_capacity(faces.len() * 2);
+    let mut count: IndexMap<EdgeKey, u8> = IndexMap::default();
+    count.reserve(faces.len() * 2);
     let mut marked = 0;
     for (fi, f) in faces.iter().enumerate() {
         if !active[fi] {
@@ -74,7 +73,7 @@ pub(super) fn split_fans(
     faces: &[Vec<usize>],
     active: &[bool],
     n_points: usize,
-    cut: &HashSet<EdgeKey>,
+    cut: &IndexSet<EdgeKey>,
 ) -> Fans {
     let mut start = Vec::with_capacity(faces.len() + 1);
     start.push(0);
@@ -84,13 +83,16 @@ pub(super) fn split_fans(
     }
     let n_corners = start[faces.len()];
     // Directed edge a→b ↦ corner of `a` in the face using it.
-    let mut directed: HashMap<(usize, usize), usize> = HashMap::with_capacity(n_corners);
-    let mut twice: HashSet<EdgeKey> = HashSet::new();
+    let mut directed: IndexMap<(usize, usize), usize> = IndexMap::default();
+    directed.reserve(n_corners);
+    let mut twice: IndexSet<EdgeKey> = IndexSet::default();
+    let mut corner_face = vec![0usize; n_corners];
     for (fi, f) in faces.iter().enumerate() {
         if !active[fi] {
             continue;
         }
         let n = f.len();
+        corner_face[start[fi]..start[fi] + n].fill(fi);
         for k in 0..n {
             if directed
                 .insert((f[k], f[(k + 1) % n]), start[fi] + k)
@@ -105,7 +107,6 @@ pub(super) fn split_fans(
         let n = start[fi + 1] - start[fi];
         start[fi] + (c - start[fi] + 1) % n
     };
-    let corner_face = |c: usize| start.partition_point(|&s| s <= c) - 1;
     for (&(a, b), &ca) in &directed {
         let key = edge_key(a, b);
         if cut.contains(&key) || twice.contains(&key) {
@@ -116,11 +117,11 @@ pub(super) fn split_fans(
         };
         // ca is a's corner in face F (edge a→b); cb is b's corner in face G (edge b→a).
         // a's corner in G is the one after cb; b's corner in F is the one after ca.
-        let (fa, fb) = (corner_face(ca), corner_face(cb));
+        let (fa, fb) = (corner_face[ca], corner_face[cb]);
         dsu.union(ca, next_corner(cb, fb));
         dsu.union(cb, next_corner(ca, fa));
     }
-    let mut owner: HashMap<usize, usize> = HashMap::new();
+    let mut owner: IndexMap<usize, usize> = IndexMap::default();
     let mut first_class = vec![usize::MAX; n_points];
     let mut copies = Vec::new();
     let mut split = vec![false; n_points];
@@ -156,18 +157,18 @@ pub(super) fn split_fans(
 
 /// Active faces (after splitting) that reuse a directed edge of an earlier face.
 pub(super) fn directed_conflicts(faces: &[Vec<usize>], active: &[bool]) -> Vec<usize> {
-    let mut used: HashSet<(usize, usize)> = HashSet::new();
+    let mut used: IndexSet<(usize, usize)> = IndexSet::default();
     let mut bad = Vec::new();
     for (fi, f) in faces.iter().enumerate() {
         if !active[fi] {
             continue;
         }
         let n = f.len();
-        let edges: Vec<(usize, usize)> = (0..n).map(|k| (f[k], f[(k + 1) % n])).collect();
-        if edges.iter().any(|e| used.contains(e)) {
+        let edge = |k: usize| (f[k], f[(k + 1) % n]);
+        if (0..n).any(|k| used.contains(&edge(k))) {
             bad.push(fi);
         } else {
-            used.extend(edges);
+            used.extend((0..n).map(edge));
         }
     }
     bad
