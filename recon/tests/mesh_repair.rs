@@ -224,6 +224,41 @@ fn shuffled_orientation_comes_back_consistent() {
 }
 
 #[test]
+fn shuffled_binary_stl_reads_back_closed_and_outward() {
+    // STL has no shared vertices: corners are welded, then orientation is repaired.
+    let sphere = icosphere(2, 1.0);
+    let mut soup = PolygonSoup::from_mesh(&sphere);
+    let faces: Vec<Vec<usize>> = soup
+        .faces()
+        .enumerate()
+        .map(|(k, f)| {
+            if k % 3 == 0 {
+                f.iter().rev().copied().collect()
+            } else {
+                f.to_vec()
+            }
+        })
+        .collect();
+    let points = soup.points.clone();
+    soup = PolygonSoup::new();
+    soup.points = points;
+    for f in &faces {
+        soup.push_face(f);
+    }
+    let path = tmp("shuffled.stl");
+    write_mesh_file(&path, &soup).unwrap();
+    let (m, r) = read_mesh_file_repaired(&path).unwrap();
+    assert_eq!(r.flipped_faces, faces.len().div_ceil(3));
+    assert!(m.is_closed());
+    assert_eq!(
+        (m.n_vertices(), m.n_faces()),
+        (sphere.n_vertices(), sphere.n_faces())
+    );
+    // f32 coordinates: the volume matches the f64 original to single precision.
+    assert!((signed_volume(&m) - signed_volume(&sphere)).abs() < 1e-5);
+}
+
+#[test]
 fn bow_tie_vertex_is_split_with_file_indices_kept() {
     let pts: Vec<Vec3> = [
         (0.0, 0.0, 0.0),

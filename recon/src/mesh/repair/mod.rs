@@ -7,8 +7,9 @@
 //!    distinct vertices are dropped; exact duplicate faces (either orientation) are dropped
 //!    ([`clean`]); zero-area faces are kept and counted;
 //! 3. a face that would give an edge a third face is set aside ([`split`]);
-//! 4. faces are oriented consistently per connected component ([`orient`]); a
-//!    non-orientable component is cut along the edges where orientation conflicts;
+//! 4. faces are oriented consistently per connected component ([`orient`]), keeping the
+//!    orientation most of the component's faces had in the file; a non-orientable
+//!    component is cut along the edges where orientation conflicts;
 //! 5. vertices whose faces form several fans are split, copies appended ([`split`]);
 //! 6. the faces set aside in step 3 are added on their own vertex copies (pmp-library,
 //!    OpenMesh), also appended.
