@@ -7,6 +7,7 @@ pub mod bench;
 pub mod calibrate;
 pub mod decode;
 pub mod demo;
+pub mod mesh;
 pub mod output;
 pub mod pivot;
 pub mod replay;

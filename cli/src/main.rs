@@ -39,6 +39,8 @@ enum Command {
     Calibrate(cli::calibrate::CalibrateArgs),
     /// Fit the pen-tip offset from a recording of the pivot gesture (tip held still, pen turned).
     Pivot(cli::pivot::PivotArgs),
+    /// Inspect a mesh file: counts, topology and what reading it repaired (one JSON line).
+    Mesh(cli::mesh::MeshArgs),
 }
 
 fn main() -> ExitCode {
@@ -52,6 +54,7 @@ fn main() -> ExitCode {
         Command::Calibrate(args) => cli::calibrate::run(args),
         Command::Track(args) => cli::track::run(args),
         Command::Pivot(args) => cli::pivot::run(args),
+        Command::Mesh(args) => cli::mesh::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -6,7 +6,7 @@ use std::f64::consts::PI;
 
 use crate::geometry::Vec3;
 use crate::mesh::{SurfaceMesh, Vertex};
-use crate::operators::{triangles, OperatorError};
+use crate::operators::{triangles_for, OperatorError};
 
 /// Loop's interior weight β(n) = (1/n)(5/8 − (3/8 + ¼ cos(2π/n))²).
 fn loop_beta(n: usize) -> f64 {
@@ -53,7 +53,7 @@ fn odd_position(mesh: &SurfaceMesh, e: crate::mesh::Edge) -> Vec3 {
 /// triangle mesh (no garbage). Vertices keep their indices; edge `e` gets vertex
 /// `n_vertices + e`.
 pub fn loop_subdivision(mesh: &SurfaceMesh) -> Result<SurfaceMesh, OperatorError> {
-    let tris = triangles(mesh)?;
+    let tris = triangles_for(mesh, "Loop subdivision")?;
     let nv = mesh.vertices_size();
     let mut points: Vec<Vec3> = mesh.vertices().map(|v| even_position(mesh, v)).collect();
     points.extend(mesh.edges().map(|e| odd_position(mesh, e)));

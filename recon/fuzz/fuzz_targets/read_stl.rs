@@ -9,5 +9,9 @@ fuzz_target!(|data: &[u8]| {
         if let Ok(mesh) = soup.to_mesh() {
             let _ = mesh.validate();
         }
+        // The repairing build must succeed on any in-range soup and give a valid mesh.
+        if let Ok((mesh, _)) = soup.to_mesh_repaired() {
+            assert!(mesh.validate().is_ok());
+        }
     }
 });

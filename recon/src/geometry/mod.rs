@@ -3,5 +3,7 @@
 mod triangle;
 mod vec3;
 
-pub use triangle::{cot_of_angle_between, triangle_angles, triangle_area, triangle_normal};
+pub use triangle::{
+    cot_of_angle_between, is_degenerate_triangle, triangle_angles, triangle_area, triangle_normal,
+};
 pub use vec3::Vec3;

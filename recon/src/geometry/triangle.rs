@@ -32,6 +32,16 @@ pub fn cot_of_angle_between(u: Vec3, v: Vec3) -> f64 {
     cos / sin.max(floor)
 }
 
+/// True when a corner's sine is below the cotangent clamp of [`cot_of_angle_between`]
+/// (`|u × v| < 1e-8 |u||v|`) or two corners coincide: a zero-area triangle whose
+/// clamped cotangents no longer form a positive semidefinite element matrix.
+pub fn is_degenerate_triangle(a: Vec3, b: Vec3, c: Vec3) -> bool {
+    let twice_area = triangle_normal(a, b, c).norm();
+    let (ab, bc, ca) = ((b - a).norm(), (c - b).norm(), (a - c).norm());
+    let widest = (ab * ca).max(ab * bc).max(bc * ca);
+    ab == 0.0 || bc == 0.0 || ca == 0.0 || twice_area < MIN_RELATIVE_SINE * widest
+}
+
 /// Interior angles at `a`, `b` and `c` (radians), computed with `atan2` for accuracy on
 /// thin triangles. A corner with a zero-length edge gets angle 0.
 pub fn triangle_angles(a: Vec3, b: Vec3, c: Vec3) -> [f64; 3] {

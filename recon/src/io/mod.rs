@@ -26,6 +26,7 @@ pub use ply::{read_ply, write_ply, PlyEncoding};
 pub use soup::PolygonSoup;
 pub use stl::{read_stl, write_stl, StlEncoding};
 
+use crate::mesh::{mesh_info, MeshInfo, Repairs, SurfaceMesh};
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Write};
 use std::path::Path;
@@ -86,6 +87,18 @@ pub fn read_mesh_file(path: impl AsRef<Path>) -> Result<PolygonSoup, IoError> {
         MeshFormat::Ply => read_ply(r),
         MeshFormat::Stl => read_stl(r),
     }
+}
+
+/// Reads a mesh file into a halfedge mesh, repairing what the file's polygons need (see
+/// [`SurfaceMesh::from_polygons_repaired`]); returns the mesh and what was repaired.
+pub fn read_mesh_file_repaired(path: impl AsRef<Path>) -> Result<(SurfaceMesh, Repairs), IoError> {
+    read_mesh_file(path)?.to_mesh_repaired()
+}
+
+/// [`mesh_info`] of a mesh file read with [`read_mesh_file_repaired`].
+pub fn mesh_file_info(path: impl AsRef<Path>) -> Result<MeshInfo, IoError> {
+    let (mesh, repairs) = read_mesh_file_repaired(path)?;
+    Ok(mesh_info(&mesh, &repairs))
 }
 
 /// Writes a mesh file, choosing the format from the extension (PLY and STL binary).

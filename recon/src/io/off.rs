@@ -5,6 +5,7 @@
 use std::io::{BufRead, Write};
 
 use super::lines::{check_count, parse_coord, parse_usize, Lines};
+use super::soup::write_counted_face_lines;
 use super::{limits, IoError, PolygonSoup};
 use crate::geometry::Vec3;
 
@@ -80,12 +81,5 @@ pub fn write_off<W: Write>(mut w: W, soup: &PolygonSoup) -> Result<(), IoError> 
     for p in &soup.points {
         writeln!(w, "{:?} {:?} {:?}", p.x, p.y, p.z)?;
     }
-    for f in soup.faces() {
-        write!(w, "{}", f.len())?;
-        for i in f {
-            write!(w, " {i}")?;
-        }
-        writeln!(w)?;
-    }
-    Ok(())
+    write_counted_face_lines(&mut w, soup)
 }

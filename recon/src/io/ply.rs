@@ -7,6 +7,7 @@
 use std::io::{BufRead, Read, Write};
 
 use super::lines::{check_count, truncate, Lines};
+use super::soup::write_counted_face_lines;
 use super::{limits, IoError, PolygonSoup};
 use crate::geometry::Vec3;
 
@@ -456,14 +457,7 @@ pub fn write_ply<W: Write>(
         for p in &soup.points {
             writeln!(w, "{:?} {:?} {:?}", p.x, p.y, p.z)?;
         }
-        for f in soup.faces() {
-            write!(w, "{}", f.len())?;
-            for i in f {
-                write!(w, " {i}")?;
-            }
-            writeln!(w)?;
-        }
-        return Ok(());
+        return write_counted_face_lines(&mut w, soup);
     }
     let mut buf = Vec::with_capacity(1 << 16);
     for p in &soup.points {

@@ -1,8 +1,10 @@
 //! [`PolygonSoup`]: positions plus flat polygon index lists, what every reader produces.
 
+use std::io::Write;
+
 use super::IoError;
 use crate::geometry::Vec3;
-use crate::mesh::{SurfaceMesh, Vertex};
+use crate::mesh::{RepairOptions, Repairs, SurfaceMesh, Vertex};
 
 /// Vertex positions and polygons (as index lists stored back to back).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -68,6 +70,16 @@ impl PolygonSoup {
     pub fn to_mesh(&self) -> Result<SurfaceMesh, IoError> {
         Ok(SurfaceMesh::from_face_slices(&self.points, self.faces())?)
     }
+    /// Builds a halfedge mesh from any polygons, repairing orientation, non-manifold
+    /// vertices and edges, degenerate and duplicate faces (see
+    /// [`SurfaceMesh::from_polygons_repaired`]); fails only on broken indices.
+    pub fn to_mesh_repaired(&self) -> Result<(SurfaceMesh, Repairs), IoError> {
+        Ok(SurfaceMesh::from_polygons_repaired(
+            &self.points,
+            self.faces(),
+            &RepairOptions::default(),
+        )?)
+    }
     /// The live vertices and faces of a mesh, renumbered densely.
     pub fn from_mesh(mesh: &SurfaceMesh) -> Self {
         let mut map = vec![usize::MAX; mesh.vertices_size()];
@@ -85,4 +97,19 @@ impl PolygonSoup {
         }
         soup
     }
+}
+
+/// Writes every face as a text line `k i₁ … i_k` (the face lists of OFF and ASCII PLY).
+pub(crate) fn write_counted_face_lines<W: Write>(
+    w: &mut W,
+    soup: &PolygonSoup,
+) -> Result<(), IoError> {
+    for f in soup.faces() {
+        write!(w, "{}", f.len())?;
+        for i in f {
+            write!(w, " {i}")?;
+        }
+        writeln!(w)?;
+    }
+    Ok(())
 }

@@ -13,12 +13,16 @@ mod error;
 mod euler;
 mod garbage;
 mod handles;
+mod info;
 mod properties;
+mod repair;
 mod surface_mesh;
 mod validate;
 
 pub use circulators::{FaceHalfedges, VertexHalfedges};
 pub use error::MeshError;
 pub use handles::{Edge, Face, Halfedge, Vertex};
+pub use info::{mesh_info, ComponentInfo, MeshInfo, MAX_LISTED_COMPONENTS};
 pub use properties::{Property, PropertyContainer};
+pub use repair::{is_zero_area_polygon, RepairOptions, Repairs, ZERO_AREA_RELATIVE};
 pub use surface_mesh::SurfaceMesh;

@@ -1,7 +1,7 @@
 //! The cotangent matrix `C_ij = ½(cot α_ij + cot β_ij)`, `C_ii = −Σ_j C_ij`
 //! (FIRES thesis, Part I §1.4 Meyer row; symmetric, negative semidefinite).
 
-use super::{triangles, OperatorError};
+use super::{face_triangles, OperatorError};
 use crate::geometry::cot_of_angle_between;
 use crate::mesh::SurfaceMesh;
 use crate::solve::{sparse_from_triplets, sparse_triplets, SparseMatrix};
@@ -21,9 +21,10 @@ pub(crate) fn half_cotangents(mesh: &SurfaceMesh, tris: &[[usize; 3]]) -> Vec<[f
         .collect()
 }
 
-/// The cotangent matrix of a triangle mesh (`n_vertices × n_vertices`). Rows sum to 0.
+/// The cotangent matrix (`n_vertices × n_vertices`); rows sum to 0. Polygon faces are
+/// triangulated first ([`super::face_triangles`]).
 pub fn cotan_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorError> {
-    let tris = triangles(mesh)?;
+    let tris = face_triangles(mesh)?;
     let cots = half_cotangents(mesh, &tris);
     let mut t = Vec::with_capacity(tris.len() * 12);
     for (tri, cot) in tris.iter().zip(&cots) {

@@ -11,7 +11,7 @@ use std::f64::consts::PI;
 use super::cotan::cotan_matrix;
 use super::mass::{vertex_areas, MassKind};
 use super::normals::{vertex_normals, NormalWeighting};
-use super::{triangles, OperatorError};
+use super::{triangles_for, OperatorError};
 use crate::geometry::{triangle_angles, Vec3};
 use crate::mesh::SurfaceMesh;
 use crate::solve::sparse_triplets;
@@ -50,7 +50,7 @@ pub fn mean_curvature(mesh: &SurfaceMesh) -> Result<Vec<f64>, OperatorError> {
 /// Angle defect of every vertex: `2π − Σθ` inside, `π − Σθ` on the boundary, 0 if
 /// isolated. On a closed mesh the sum is exactly `2πχ` up to rounding (Gauss–Bonnet).
 pub fn angle_defects(mesh: &SurfaceMesh) -> Result<Vec<f64>, OperatorError> {
-    let tris = triangles(mesh)?;
+    let tris = triangles_for(mesh, "angle defects")?;
     let p = mesh.positions();
     let mut sum = vec![0.0; p.len()];
     for &[a, b, c] in &tris {

@@ -15,7 +15,7 @@ use faer::Mat;
 use super::cotan::cotan_matrix;
 use super::gradient::hat_gradients;
 use super::mass::{vertex_areas, MassKind};
-use super::{mean_edge_length, triangles, OperatorError};
+use super::{mean_edge_length, triangles_for, OperatorError};
 use crate::geometry::Vec3;
 use crate::mesh::{SurfaceMesh, Vertex};
 use crate::solve::{sparse_from_triplets, sparse_triplets, CholeskyOptions, CholeskySolver};
@@ -33,7 +33,7 @@ pub struct HeatGeodesic {
 impl HeatGeodesic {
     /// Factorises the heat and Poisson systems of a triangle mesh.
     pub fn new(mesh: &SurfaceMesh) -> Result<Self, OperatorError> {
-        let tris = triangles(mesh)?;
+        let tris = triangles_for(mesh, "heat geodesics")?;
         let n = mesh.vertices_size();
         let c = sparse_triplets(cotan_matrix(mesh)?.as_ref());
         let m = vertex_areas(mesh, MassKind::MixedVoronoi)?;

@@ -6,7 +6,7 @@
 //! the integrated `−Σ_T |T| ω^i_T · V_T`, i.e. `D = −Gᵀ·diag(|T|)`, which makes
 //! `D·G = C` (the cotangent matrix) exactly.
 
-use super::{triangles, OperatorError};
+use super::{triangles_for, OperatorError};
 use crate::geometry::triangle_normal;
 use crate::mesh::SurfaceMesh;
 use crate::solve::{sparse_from_triplets, SparseMatrix};
@@ -33,7 +33,7 @@ pub(crate) fn hat_gradients(
 /// The `3F × V` gradient matrix: row `3f + c` is the `c`-th coordinate of the gradient on
 /// face `f` (degenerate faces get zero rows).
 pub fn gradient_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorError> {
-    let tris = triangles(mesh)?;
+    let tris = triangles_for(mesh, "gradient matrix")?;
     let mut t = Vec::with_capacity(tris.len() * 9);
     for (f, (tri, g)) in tris.iter().zip(hat_gradients(mesh, &tris)).enumerate() {
         let Some((_, grads)) = g else { continue };
@@ -53,7 +53,7 @@ pub fn gradient_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorError
 /// The `V × 3F` integrated divergence `−Gᵀ·diag(|T|)` of per-face vector fields laid out as
 /// in [`gradient_matrix`].
 pub fn divergence_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorError> {
-    let tris = triangles(mesh)?;
+    let tris = triangles_for(mesh, "divergence matrix")?;
     let mut t = Vec::with_capacity(tris.len() * 9);
     for (f, (tri, g)) in tris.iter().zip(hat_gradients(mesh, &tris)).enumerate() {
         let Some((area, grads)) = g else { continue };
@@ -75,7 +75,7 @@ pub fn divergence_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorErr
 /// around each vertex, as a `3V × V` matrix (row `3i + c`). Its transpose-free use
 /// `div V ≈ Σ_c W_c V_c` (§1.3) and the 2-ring Laplacian `W·W` follow from it.
 pub fn vertex_gradient_matrix(mesh: &SurfaceMesh) -> Result<SparseMatrix, OperatorError> {
-    let tris = triangles(mesh)?;
+    let tris = triangles_for(mesh, "vertex gradient matrix")?;
     let n = mesh.vertices_size();
     let grads = hat_gradients(mesh, &tris);
     let mut ring_area = vec![0.0; n];

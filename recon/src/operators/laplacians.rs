@@ -10,11 +10,12 @@
 //! | `MeanValue` | (tan(γ/2) + tan(η/2))/‖X_i − X_j‖ | 1 (not symmetric) |
 //!
 //! `(L f)_i ≈ Δf(X_i)`; every row sums to zero. Umbrella and scaled umbrella work on any
-//! polygon mesh (they only use edges); the others need triangles.
+//! polygon mesh (they only use edges); the cotangent kinds triangulate polygons
+//! ([`super::face_triangles`]); mean-value weights need triangles.
 
 use super::cotan::cotan_matrix;
 use super::mass::{vertex_areas, MassKind};
-use super::{triangles, OperatorError};
+use super::{triangles_for, OperatorError};
 use crate::mesh::SurfaceMesh;
 use crate::solve::{sparse_from_triplets, sparse_triplets, SparseMatrix};
 
@@ -121,7 +122,7 @@ fn edge_length_sums(mesh: &SurfaceMesh) -> Vec<f64> {
 fn mean_value_weights(mesh: &SurfaceMesh) -> Result<Vec<(usize, usize, f64)>, OperatorError> {
     let p = mesh.positions();
     let mut t = Vec::new();
-    for tri in triangles(mesh)? {
+    for tri in triangles_for(mesh, "mean-value Laplacian")? {
         for k in 0..3 {
             let (i, j, l) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
             let (u, v) = (p[j] - p[i], p[l] - p[i]);

@@ -1,7 +1,7 @@
 //! Vertex areas and the lumped mass matrix (FIRES thesis, Part I §1.1: barycentric cells and
 //! Meyer et al.'s mixed Voronoi cells).
 
-use super::{triangles, OperatorError};
+use super::{face_triangles, OperatorError};
 use crate::geometry::{cot_of_angle_between, triangle_area};
 use crate::mesh::SurfaceMesh;
 use crate::solve::{sparse_from_triplets, SparseMatrix};
@@ -18,8 +18,9 @@ pub enum MassKind {
 }
 
 /// Area of every vertex's dual cell (indexed by vertex index); sums to the total area.
+/// Polygon faces are triangulated first ([`super::face_triangles`]).
 pub fn vertex_areas(mesh: &SurfaceMesh, kind: MassKind) -> Result<Vec<f64>, OperatorError> {
-    let tris = triangles(mesh)?;
+    let tris = face_triangles(mesh)?;
     let p = mesh.positions();
     let mut area = vec![0.0; mesh.vertices_size()];
     for &t in &tris {

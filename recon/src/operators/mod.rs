@@ -1,6 +1,10 @@
 //! Discrete differential operators on triangle meshes (FIRES thesis, Part I §1.1–1.6,
 //! Differential Methods for Intuitive 3D Shape Modeling, ch. 1; conventions of FIRES thesis, Part I §0).
 //!
+//! Polygon meshes: the cotangent matrix and the vertex areas (so the cotangent
+//! Laplacians and mass matrices) triangulate each polygon first ([`face_triangles`]); the
+//! other triangle operators return [`OperatorError::NeedsTriangles`] naming themselves.
+//!
 //! Conventions:
 //! * Matrices are indexed by vertex/face *index*; call
 //!   [`crate::mesh::SurfaceMesh::garbage_collection`] first so indices are dense.
@@ -26,6 +30,7 @@ mod gradient;
 mod laplacians;
 mod mass;
 mod normals;
+mod triangulate;
 
 pub use areas::{face_areas, mean_edge_length, total_area, volume};
 pub use cotan::{clamp_negative_offdiagonal, cotan_matrix};
@@ -37,6 +42,7 @@ pub use gradient::{divergence_matrix, gradient_matrix, vertex_gradient_matrix};
 pub use laplacians::{laplacian, LaplacianKind};
 pub use mass::{mass_matrix, vertex_areas, MassKind};
 pub use normals::{face_normals, vertex_normals, NormalWeighting};
+pub use triangulate::{face_triangles, triangulate, triangulate_polygon, MAX_DP_DEGREE};
 
 use crate::mesh::{Face, SurfaceMesh, Vertex};
 use crate::solve::SolveError;
@@ -47,6 +53,15 @@ pub enum OperatorError {
     /// The operator needs triangles; this face has another degree.
     #[error("operator needs a triangle mesh; face {0} is not a triangle")]
     NotTriangle(Face),
+    /// The named operator needs triangles; this face has another degree (triangulate the
+    /// mesh with [`triangulate`] first).
+    #[error("{operator} needs a triangle mesh; face {face} is not a triangle (triangulate first)")]
+    NeedsTriangles {
+        /// Which operator refused.
+        operator: &'static str,
+        /// The first non-triangle face.
+        face: Face,
+    },
     /// The mesh has deleted elements; call `garbage_collection()` first.
     #[error("mesh has deleted elements; call garbage_collection() first")]
     HasGarbage,
@@ -59,6 +74,17 @@ pub enum OperatorError {
     /// The linear solve failed.
     #[error(transparent)]
     Solve(#[from] SolveError),
+}
+
+/// [`triangles`] for the named operator: a polygon gives [`OperatorError::NeedsTriangles`].
+pub(crate) fn triangles_for(
+    mesh: &SurfaceMesh,
+    operator: &'static str,
+) -> Result<Vec<[usize; 3]>, OperatorError> {
+    triangles(mesh).map_err(|e| match e {
+        OperatorError::NotTriangle(face) => OperatorError::NeedsTriangles { operator, face },
+        e => e,
+    })
 }
 
 /// The three vertex indices of every face, checking the mesh is a compact triangle mesh.
