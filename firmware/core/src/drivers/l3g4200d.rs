@@ -15,7 +15,7 @@
 use embedded_hal_async::delay::DelayNs;
 
 use super::bus::RegisterBus;
-use super::{axes_le, Axes, SensorError};
+use super::{Axes, Part, Sensor, SensorError};
 
 /// 7-bit I2C address with SDO high (the FIRES board).
 pub const I2C_ADDRESS: u8 = 0x69;
@@ -57,46 +57,25 @@ pub const SELF_TEST_MIN_COUNTS: i16 = SELF_TEST_TYPICAL_COUNTS / 2;
 pub const SELF_TEST_MAX_COUNTS: i16 = SELF_TEST_TYPICAL_COUNTS / 2 * 3;
 const SETTLE_MS: u32 = 60;
 
-/// The gyroscope.
+/// The L3G4200D register map.
 #[derive(Debug)]
-pub struct L3g4200d<B> {
-    bus: B,
+pub struct Gyroscope;
+
+impl Part for Gyroscope {
+    const WHO_AM_I: u8 = reg::WHO_AM_I;
+    const WHO_AM_I_VALUE: u8 = WHO_AM_I_VALUE;
+    const CONFIGURATION: &'static [(u8, u8)] = &[
+        (reg::CTRL_REG4, CTRL_REG4_RUN),
+        (reg::CTRL_REG1, CTRL_REG1_VALUE),
+    ];
+    const OUTPUT: u8 = reg::OUT_X_L;
+    const BIG_ENDIAN: bool = false;
 }
 
+/// The gyroscope.
+pub type L3g4200d<B> = Sensor<B, Gyroscope>;
+
 impl<B: RegisterBus> L3g4200d<B> {
-    /// Wraps a register bus.
-    pub fn new(bus: B) -> Self {
-        L3g4200d { bus }
-    }
-
-    /// Gives the bus back.
-    pub fn release(self) -> B {
-        self.bus
-    }
-
-    /// Checks WHO_AM_I.
-    pub async fn identify(&mut self) -> Result<(), SensorError<B::Error>> {
-        super::check_identity(&mut self.bus, reg::WHO_AM_I, WHO_AM_I_VALUE).await
-    }
-
-    /// Writes the FIRES configuration (module docs).
-    pub async fn configure(&mut self) -> Result<(), SensorError<B::Error>> {
-        self.bus
-            .write_register(reg::CTRL_REG4, CTRL_REG4_RUN)
-            .await?;
-        self.bus
-            .write_register(reg::CTRL_REG1, CTRL_REG1_VALUE)
-            .await?;
-        Ok(())
-    }
-
-    /// Reads x, y, z in one auto-increment burst (raw counts).
-    pub async fn read(&mut self) -> Result<Axes, SensorError<B::Error>> {
-        let mut b = [0u8; 6];
-        self.bus.read_registers(reg::OUT_X_L, &mut b).await?;
-        Ok(axes_le(&b))
-    }
-
     /// Runs self-test 0: the change of the mean output with ST = 01 against normal mode must be within
     /// [`SELF_TEST_MIN_COUNTS`]..=[`SELF_TEST_MAX_COUNTS`] in magnitude on every axis. Leaves the part running.
     pub async fn self_test<D: DelayNs>(

@@ -14,7 +14,7 @@
 use embedded_hal_async::delay::DelayNs;
 
 use super::bus::RegisterBus;
-use super::{axes_le, Axes, SensorError};
+use super::{Axes, Part, Sensor, SensorError};
 
 /// 7-bit I2C address.
 pub const I2C_ADDRESS: u8 = 0x1D;
@@ -57,46 +57,25 @@ pub const SELF_TEST_MAX_COUNTS: i16 = 1200;
 /// Settling time after a mode change, ms (several 160 Hz periods).
 const SETTLE_MS: u32 = 50;
 
-/// The accelerometer.
+/// The LIS3LV02DL register map.
 #[derive(Debug)]
-pub struct Lis3lv02dl<B> {
-    bus: B,
+pub struct Accelerometer;
+
+impl Part for Accelerometer {
+    const WHO_AM_I: u8 = reg::WHO_AM_I;
+    const WHO_AM_I_VALUE: u8 = WHO_AM_I_VALUE;
+    const CONFIGURATION: &'static [(u8, u8)] = &[
+        (reg::CTRL_REG2, CTRL_REG2_VALUE),
+        (reg::CTRL_REG1, CTRL_REG1_RUN),
+    ];
+    const OUTPUT: u8 = reg::OUTX_L;
+    const BIG_ENDIAN: bool = false;
 }
 
+/// The accelerometer.
+pub type Lis3lv02dl<B> = Sensor<B, Accelerometer>;
+
 impl<B: RegisterBus> Lis3lv02dl<B> {
-    /// Wraps a register bus (see [`super::bus`]).
-    pub fn new(bus: B) -> Self {
-        Lis3lv02dl { bus }
-    }
-
-    /// Gives the bus back.
-    pub fn release(self) -> B {
-        self.bus
-    }
-
-    /// Checks WHO_AM_I.
-    pub async fn identify(&mut self) -> Result<(), SensorError<B::Error>> {
-        super::check_identity(&mut self.bus, reg::WHO_AM_I, WHO_AM_I_VALUE).await
-    }
-
-    /// Writes the FIRES configuration (module docs).
-    pub async fn configure(&mut self) -> Result<(), SensorError<B::Error>> {
-        self.bus
-            .write_register(reg::CTRL_REG2, CTRL_REG2_VALUE)
-            .await?;
-        self.bus
-            .write_register(reg::CTRL_REG1, CTRL_REG1_RUN)
-            .await?;
-        Ok(())
-    }
-
-    /// Reads x, y, z in one auto-increment burst (raw counts).
-    pub async fn read(&mut self) -> Result<Axes, SensorError<B::Error>> {
-        let mut b = [0u8; 6];
-        self.bus.read_registers(reg::OUTX_L, &mut b).await?;
-        Ok(axes_le(&b))
-    }
-
     /// Runs the electrostatic self-test: mean output with ST = 1 minus mean output with ST = 0, each axis within
     /// [`SELF_TEST_MIN_COUNTS`]..=[`SELF_TEST_MAX_COUNTS`] in magnitude. Leaves the part configured for running.
     /// The pen must be held still. Returns the per-axis change.

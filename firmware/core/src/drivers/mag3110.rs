@@ -17,7 +17,7 @@
 use embedded_hal_async::delay::DelayNs;
 
 use super::bus::RegisterBus;
-use super::{axes_be, Axes, SensorError};
+use super::{Axes, Part, Sensor, SensorError};
 
 /// 7-bit I2C address.
 pub const I2C_ADDRESS: u8 = 0x0E;
@@ -57,49 +57,26 @@ pub const MIN_FIELD_COUNTS: i32 = 100;
 /// Data-ready polls before giving up (10 ms apart).
 const READY_POLLS: usize = 10;
 
-/// The magnetometer.
+/// The MAG3110 register map.
 #[derive(Debug)]
-pub struct Mag3110<B> {
-    bus: B,
+pub struct Magnetometer;
+
+impl Part for Magnetometer {
+    const WHO_AM_I: u8 = reg::WHO_AM_I;
+    const WHO_AM_I_VALUE: u8 = WHO_AM_I_VALUE;
+    const CONFIGURATION: &'static [(u8, u8)] = &[
+        (reg::CTRL_REG1, CTRL_REG1_STANDBY),
+        (reg::CTRL_REG2, CTRL_REG2_VALUE),
+        (reg::CTRL_REG1, CTRL_REG1_ACTIVE),
+    ];
+    const OUTPUT: u8 = reg::OUT_X_MSB;
+    const BIG_ENDIAN: bool = true;
 }
 
+/// The magnetometer.
+pub type Mag3110<B> = Sensor<B, Magnetometer>;
+
 impl<B: RegisterBus> Mag3110<B> {
-    /// Wraps a register bus (use [`super::bus::I2cRegisters::plain`]).
-    pub fn new(bus: B) -> Self {
-        Mag3110 { bus }
-    }
-
-    /// Gives the bus back.
-    pub fn release(self) -> B {
-        self.bus
-    }
-
-    /// Checks WHO_AM_I.
-    pub async fn identify(&mut self) -> Result<(), SensorError<B::Error>> {
-        super::check_identity(&mut self.bus, reg::WHO_AM_I, WHO_AM_I_VALUE).await
-    }
-
-    /// Writes the FIRES configuration (module docs): standby, CTRL_REG2, then active.
-    pub async fn configure(&mut self) -> Result<(), SensorError<B::Error>> {
-        self.bus
-            .write_register(reg::CTRL_REG1, CTRL_REG1_STANDBY)
-            .await?;
-        self.bus
-            .write_register(reg::CTRL_REG2, CTRL_REG2_VALUE)
-            .await?;
-        self.bus
-            .write_register(reg::CTRL_REG1, CTRL_REG1_ACTIVE)
-            .await?;
-        Ok(())
-    }
-
-    /// Reads x, y, z (raw counts) in one burst from OUT_X_MSB.
-    pub async fn read(&mut self) -> Result<Axes, SensorError<B::Error>> {
-        let mut b = [0u8; 6];
-        self.bus.read_registers(reg::OUT_X_MSB, &mut b).await?;
-        Ok(axes_be(&b))
-    }
-
     /// The stand-in for a self-test (module docs). Returns the reading it judged.
     pub async fn plausibility_check<D: DelayNs>(
         &mut self,

@@ -11,6 +11,9 @@ pub mod bus;
 pub mod l3g4200d;
 pub mod lis3lv02dl;
 pub mod mag3110;
+pub mod sensor;
+
+pub use sensor::{Part, Sensor};
 
 /// Raw counts of one 3-axis reading: x, y, z.
 pub type Axes = [i16; 3];
