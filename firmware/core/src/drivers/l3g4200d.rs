@@ -12,10 +12,7 @@
 //!
 //! I2C address 0x69 (SDO tied high; 0x68 with SDO low); sub-address bit 7 requests auto-increment.
 
-use embedded_hal_async::delay::DelayNs;
-
-use super::bus::RegisterBus;
-use super::{Axes, Part, Sensor, SensorError};
+use super::{Part, SelfTest, SelfTesting, Sensor};
 
 /// 7-bit I2C address with SDO high (the FIRES board).
 pub const I2C_ADDRESS: u8 = 0x69;
@@ -75,26 +72,18 @@ impl Part for Gyroscope {
 /// The gyroscope.
 pub type L3g4200d<B> = Sensor<B, Gyroscope>;
 
-impl<B: RegisterBus> L3g4200d<B> {
-    /// Runs self-test 0: the change of the mean output with ST = 01 against normal mode must be within
+impl SelfTesting for Gyroscope {
+    /// Self-test 0: the change of the mean output with ST = 01 against normal mode must be within
     /// [`SELF_TEST_MIN_COUNTS`]..=[`SELF_TEST_MAX_COUNTS`] in magnitude on every axis. Leaves the part running.
-    pub async fn self_test<D: DelayNs>(
-        &mut self,
-        delay: &mut D,
-    ) -> Result<Axes, SensorError<B::Error>> {
-        self.configure().await?;
-        super::SelfTest {
-            register: reg::CTRL_REG4,
-            excited: CTRL_REG4_SELF_TEST,
-            running: CTRL_REG4_RUN,
-            output: reg::OUT_X_L,
-            settle_ms: SETTLE_MS,
-            min: SELF_TEST_MIN_COUNTS,
-            max: SELF_TEST_MAX_COUNTS,
-        }
-        .run(&mut self.bus, delay)
-        .await
-    }
+    const SELF_TEST: SelfTest = SelfTest {
+        register: reg::CTRL_REG4,
+        excited: CTRL_REG4_SELF_TEST,
+        running: CTRL_REG4_RUN,
+        output: reg::OUT_X_L,
+        settle_ms: SETTLE_MS,
+        min: SELF_TEST_MIN_COUNTS,
+        max: SELF_TEST_MAX_COUNTS,
+    };
 }
 
 #[cfg(test)]
@@ -102,6 +91,7 @@ mod tests {
     extern crate std;
     use super::*;
     use crate::drivers::bus::I2cRegisters;
+    use crate::drivers::SensorError;
     use embassy_futures::block_on;
     use embedded_hal_mock::eh1::delay::NoopDelay;
     use embedded_hal_mock::eh1::i2c::{Mock as I2cMock, Transaction as I2cT};

@@ -11,10 +11,7 @@
 //!
 //! I2C address 0x1D (SAD 0011101b); the sub-address bit 7 requests auto-increment (see [`super::bus`]).
 
-use embedded_hal_async::delay::DelayNs;
-
-use super::bus::RegisterBus;
-use super::{Axes, Part, Sensor, SensorError};
+use super::{Part, SelfTest, SelfTesting, Sensor};
 
 /// 7-bit I2C address.
 pub const I2C_ADDRESS: u8 = 0x1D;
@@ -75,34 +72,28 @@ impl Part for Accelerometer {
 /// The accelerometer.
 pub type Lis3lv02dl<B> = Sensor<B, Accelerometer>;
 
-impl<B: RegisterBus> Lis3lv02dl<B> {
-    /// Runs the electrostatic self-test: mean output with ST = 1 minus mean output with ST = 0, each axis within
+impl SelfTesting for Accelerometer {
+    /// The electrostatic self-test: mean output with ST = 1 minus mean output with ST = 0, each axis within
     /// [`SELF_TEST_MIN_COUNTS`]..=[`SELF_TEST_MAX_COUNTS`] in magnitude. Leaves the part configured for running.
     /// The pen must be held still. Returns the per-axis change.
-    pub async fn self_test<D: DelayNs>(
-        &mut self,
-        delay: &mut D,
-    ) -> Result<Axes, SensorError<B::Error>> {
-        self.configure().await?;
-        super::SelfTest {
-            register: reg::CTRL_REG1,
-            excited: CTRL_REG1_SELF_TEST,
-            running: CTRL_REG1_RUN,
-            output: reg::OUTX_L,
-            settle_ms: SETTLE_MS,
-            min: SELF_TEST_MIN_COUNTS,
-            max: SELF_TEST_MAX_COUNTS,
-        }
-        .run(&mut self.bus, delay)
-        .await
-    }
+    const SELF_TEST: SelfTest = SelfTest {
+        register: reg::CTRL_REG1,
+        excited: CTRL_REG1_SELF_TEST,
+        running: CTRL_REG1_RUN,
+        output: reg::OUTX_L,
+        settle_ms: SETTLE_MS,
+        min: SELF_TEST_MIN_COUNTS,
+        max: SELF_TEST_MAX_COUNTS,
+    };
 }
 
 #[cfg(test)]
 mod tests {
     extern crate std;
     use super::*;
+    use crate::drivers::bus::RegisterBus;
     use crate::drivers::bus::{I2cRegisters, SpiRegisters};
+    use crate::drivers::SensorError;
     use embassy_futures::block_on;
     use embedded_hal::i2c::ErrorKind;
     use embedded_hal_mock::eh1::delay::NoopDelay;

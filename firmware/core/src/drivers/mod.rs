@@ -13,7 +13,7 @@ pub mod lis3lv02dl;
 pub mod mag3110;
 pub mod sensor;
 
-pub use sensor::{Part, Sensor};
+pub use sensor::{Part, SelfTesting, Sensor};
 
 /// Raw counts of one 3-axis reading: x, y, z.
 pub type Axes = [i16; 3];
@@ -122,7 +122,7 @@ pub(crate) async fn mean_le_axes<B: bus::RegisterBus, D: embedded_hal_async::del
 /// The self-test both ST parts run (their datasheets' procedure): configure, wait, average the output, switch the
 /// self-test bit on in `register`, wait, average again, switch back to the running value, wait, and judge the
 /// per-axis change against `min..=max` counts in magnitude. Leaves the part running.
-pub(crate) struct SelfTest {
+pub struct SelfTest {
     /// The control register holding the self-test bits.
     pub register: u8,
     /// Its value with the self-test on.
@@ -141,7 +141,7 @@ pub(crate) struct SelfTest {
 
 impl SelfTest {
     /// Runs the test on a part already configured for running; returns the per-axis change.
-    pub(crate) async fn run<B: bus::RegisterBus, D: embedded_hal_async::delay::DelayNs>(
+    pub async fn run<B: bus::RegisterBus, D: embedded_hal_async::delay::DelayNs>(
         &self,
         bus: &mut B,
         delay: &mut D,

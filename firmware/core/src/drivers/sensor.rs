@@ -5,7 +5,9 @@
 use core::marker::PhantomData;
 
 use super::bus::RegisterBus;
-use super::{axes_be, axes_le, check_identity, Axes, SensorError};
+use embedded_hal_async::delay::DelayNs;
+
+use super::{axes_be, axes_le, check_identity, Axes, SelfTest, SensorError};
 
 /// A sensor's register map, as far as the common steps need it.
 pub trait Part {
@@ -19,6 +21,12 @@ pub trait Part {
     const OUTPUT: u8;
     /// Whether the outputs are big endian (most significant byte first).
     const BIG_ENDIAN: bool;
+}
+
+/// A part with the ST self-test (the datasheets' procedure, [`SelfTest`]).
+pub trait SelfTesting: Part {
+    /// Its registers, timing and acceptance window.
+    const SELF_TEST: SelfTest;
 }
 
 /// A register-level driver of part `P` on bus `B`.
@@ -64,5 +72,18 @@ impl<B: RegisterBus, P: Part> Sensor<B, P> {
         } else {
             axes_le(&b)
         })
+    }
+}
+
+impl<B: RegisterBus, P: SelfTesting> Sensor<B, P> {
+    /// Configures the part and runs its self-test: the mean output with the self-test on minus the mean
+    /// output with it off must lie within the part's window in magnitude on every axis. The pen must be held
+    /// still. Leaves the part running and returns the per-axis change.
+    pub async fn self_test<D: DelayNs>(
+        &mut self,
+        delay: &mut D,
+    ) -> Result<Axes, SensorError<B::Error>> {
+        self.configure().await?;
+        P::SELF_TEST.run(&mut self.bus, delay).await
     }
 }
