@@ -13,7 +13,7 @@
 // pub mod coating;
 // pub mod denoise;
 pub mod detail_error;
-// pub mod implicit;
+pub mod implicit;
 pub mod local;
 pub mod lse;
 pub mod naive;
@@ -26,7 +26,7 @@ pub mod system;
 // pub mod transplant;
 
 pub use detail_error::detail_error;
-// pub use implicit::{ImplicitEditor, ImplicitOptions};
+pub use implicit::{ImplicitEditor, ImplicitOptions};
 pub use lse::{LseEditor, LseOptions};
 pub use naive::{NaiveLaplacian, NaiveOptions};
 pub use poisson::{PoissonEditor, PoissonOptions};
