@@ -23,6 +23,7 @@ pub mod geometry;
 pub mod io;
 pub mod mesh;
 pub mod operators;
+pub mod render;
 pub mod solve;
 pub mod subdivide;
 
