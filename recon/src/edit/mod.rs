@@ -11,7 +11,7 @@
 //! * [`detail_error`]: the normalised as-rigid-as-possible energy used to compare them.
 
 // pub mod coating;
-// pub mod denoise;
+pub mod denoise;
 pub mod detail_error;
 pub mod implicit;
 pub mod local;
