@@ -10,7 +10,7 @@
 //! * tools: [`coating`] (coating transfer), [`transplant`], [`denoise`];
 //! * [`detail_error`]: the normalised as-rigid-as-possible energy used to compare them.
 
-// pub mod coating;
+pub mod coating;
 pub mod denoise;
 pub mod detail_error;
 pub mod implicit;
