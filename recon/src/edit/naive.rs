@@ -26,6 +26,26 @@ pub struct NaiveLaplacian {
     delta: Mat<f64>,
 }
 
+impl NaiveLaplacian {
+    /// One solve of `(D − A) x = c` at the free vertices with given coordinates `c`
+    /// (indexed by *global* vertex, the `Σⱼ (xᵢ − xⱼ)` form) and every constrained vertex
+    /// at rest; returns local positions.
+    pub fn solve_with_coordinates(
+        problem: &EditProblem,
+        coords: &[Vec3],
+    ) -> Result<Vec<Vec3>, EditError> {
+        let k = graph_laplacian(problem)?;
+        let solver =
+            FixedSolver::precompute(k.as_ref(), &problem.constrained(), CholeskyOptions::default())?;
+        let b = Mat::from_fn(problem.len(), 3, |l, c| {
+            coords.get(problem.global[l]).map_or(0.0, |v| v[c])
+        });
+        let known = gather(&problem.rest, solver.known());
+        let x = solver.solve(b.as_ref(), known.as_ref())?;
+        Ok(from_mat(x.as_ref()))
+    }
+}
+
 impl EditMethod for NaiveLaplacian {
     type Options = NaiveOptions;
 
