@@ -10,14 +10,15 @@
 //! Transform propagation (§3.3): every boundary condition (the fixed set with the identity,
 //! each handle with its rotation `q_h` and scale `σ_h`) is weighted at a free vertex by the
 //! inverse of its distance to that vertex (the paper's "linear" scheme); rotations are
-//! averaged by the sequential slerp of footnote 3, scales by the weighted geometric mean.
-//! A face takes the average of its three vertices. Distances are shortest edge paths
+//! averaged by the sequential slerp of footnote 3 (for one handle: the slerp from the
+//! identity), scales by the weighted geometric mean. A face takes the chordal mean of its
+//! three vertices' quaternions and the geometric mean of their scales. Distances are shortest edge paths
 //! over the ROI (a documented substitute for the paper's fast-marching distance; both are
 //! only used as weights). A single handle rotated by θ therefore rotates a free vertex by
 //! `θ·d₀/(d₀ + d_h)`.
 
 use faer::Mat;
-use nalgebra::UnitQuaternion;
+use nalgebra::{UnitQuaternion, Vector3};
 
 use super::local::{cotan_stiffness, face_gradients, from_mat, gather, graph_distance};
 use super::problem::{EditProblem, Role};
@@ -80,19 +81,30 @@ impl PoissonEditor {
         Ok(from_mat(x.as_ref()))
     }
 
-    /// The per-vertex rotation and scale propagated from the handle transforms.
+    /// The per-vertex rotation and log-scale propagated from the handle transforms.
     pub fn vertex_transforms(
         &self,
         problem: &EditProblem,
         transforms: &[Similarity],
     ) -> Vec<(UnitQuaternion<f64>, f64)> {
+        // One handle: slerp(1, q_h; λ) is the rotation about q_h's axis by λ·θ_h.
+        let single = (transforms.len() == 1).then(|| {
+            let (axis, angle) = transforms[0]
+                .rotation
+                .axis_angle()
+                .map_or((Vector3::z_axis(), 0.0), |(a, t)| (a, t));
+            (axis, angle, transforms[0].scale.ln())
+        });
         (0..problem.len())
             .map(|l| match problem.role[l] {
-                Role::Handle(h) => (transforms[h].rotation, transforms[h].scale),
-                Role::Ring | Role::Anchor => (UnitQuaternion::identity(), 1.0),
-                Role::Free if !self.options.propagate => (UnitQuaternion::identity(), 1.0),
+                Role::Handle(h) => (transforms[h].rotation, transforms[h].scale.ln()),
+                Role::Ring | Role::Anchor => (UnitQuaternion::identity(), 0.0),
+                Role::Free if !self.options.propagate => (UnitQuaternion::identity(), 0.0),
                 Role::Free => {
                     let w = &self.weights[l];
+                    if let Some((axis, angle, log_s)) = single {
+                        return (UnitQuaternion::from_axis_angle(&axis, w[1] * angle), w[1] * log_s);
+                    }
                     let mut items = Vec::with_capacity(w.len());
                     items.push((UnitQuaternion::identity(), w[0]));
                     let mut log_s = 0.0;
@@ -100,13 +112,16 @@ impl PoissonEditor {
                         items.push((t.rotation, w[h + 1]));
                         log_s += w[h + 1] * t.scale.ln();
                     }
-                    (weighted_average(&items), log_s.exp())
+                    (weighted_average(&items), log_s)
                 }
             })
             .collect()
     }
 
-    /// Per-face maps `σ_T R(q_T)` from per-vertex rotations and scales.
+    /// Per-face maps `σ_T R(q_T)` from per-vertex rotations and log-scales: `q_T` is the
+    /// normalised, hemisphere-aligned sum of the three vertex quaternions (the chordal
+    /// mean, equal to the sequential slerp average to second order in their spread and
+    /// exact when they agree), `σ_T` their geometric mean.
     pub fn face_maps(
         problem: &EditProblem,
         vertex: &[(UnitQuaternion<f64>, f64)],
@@ -115,10 +130,19 @@ impl PoissonEditor {
             .faces
             .iter()
             .map(|f| {
-                let items: Vec<_> = f.iter().map(|&v| (vertex[v].0, 1.0)).collect();
-                let q = weighted_average(&items);
-                let s = (f.iter().map(|&v| vertex[v].1.ln()).sum::<f64>() / 3.0).exp();
-                q.to_rotation_matrix().into_inner() * s
+                let q0 = vertex[f[0]].0.into_inner();
+                let mut q = q0;
+                for &v in &f[1..] {
+                    let qv = vertex[v].0.into_inner();
+                    q += if q0.dot(&qv) < 0.0 { -qv } else { qv };
+                }
+                let r = UnitQuaternion::new_normalize(q).to_rotation_matrix().into_inner();
+                let ls = vertex[f[0]].1 + vertex[f[1]].1 + vertex[f[2]].1;
+                if ls == 0.0 {
+                    r
+                } else {
+                    r * (ls / 3.0).exp()
+                }
             })
             .collect()
     }

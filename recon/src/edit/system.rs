@@ -37,8 +37,8 @@ struct TermParts {
     /// `A_k` (`m × n_k`).
     a_k: SparseMatrix,
     rows: usize,
-    /// `A x₀` of the reference solution (`m × c`), if one was given.
-    a_x0: Option<Mat<f64>>,
+    /// `w A_uᵀ W A x₀` of the reference solution (`n_u × c`), if one was given.
+    rhs_x0: Option<Mat<f64>>,
 }
 
 /// A factored quadratic energy with fixed entries.
@@ -305,15 +305,18 @@ impl FactoredQuadratic {
                 None => g,
                 Some(acc) => sort_columns(add(acc.as_ref(), g.as_ref()).map_err(fe)?)?,
             });
-            let a_x0 = match x0 {
-                Some(x) => Some(sparse_mul_dense(t.a.as_ref(), x.as_ref())?),
+            let rhs_x0 = match x0 {
+                Some(x) => {
+                    let ax = sparse_mul_dense(t.a.as_ref(), x.as_ref())?;
+                    Some(sparse_mul_dense(at_w.as_ref(), ax.as_ref())?)
+                }
                 None => None,
             };
             parts.push(TermParts {
                 at_w,
                 a_k,
                 rows: t.a.nrows(),
-                a_x0,
+                rhs_x0,
             });
         }
         let gram = match gram {
@@ -372,12 +375,30 @@ impl FactoredQuadratic {
         let dk = Mat::from_fn(self.known.len(), c, |r, col| {
             known_values[(r, col)] - self.x0.as_ref().map_or(0.0, |x| x[(self.known[r], col)])
         });
+        // rhs = Σ w A_uᵀ W (b − A x₀ − A_k Δx_k); the residual b − A_k Δx_k is sparse in
+        // practice (only moved handles and gradient rows), so only its nonzero rows are
+        // multiplied.
         let mut rhs = Mat::<f64>::zeros(self.unknown.len(), c);
+        let dk_nonzero: Vec<usize> = (0..self.known.len())
+            .filter(|&r| (0..c).any(|col| dk[(r, col)] != 0.0))
+            .collect();
         for (p, bt) in self.parts.iter().zip(b) {
-            let mut r = sparse_mul_dense(p.a_k.as_ref(), dk.as_ref())?;
-            for i in 0..p.rows {
-                for col in 0..c {
-                    r[(i, col)] = -r[(i, col)] - p.a_x0.as_ref().map_or(0.0, |a| a[(i, col)]);
+            if let Some(r0) = &p.rhs_x0 {
+                rhs -= r0;
+            }
+            let mut r = vec![0.0; p.rows * c];
+            let mut touched = vec![false; p.rows];
+            let mut list = Vec::new();
+            let ak = p.a_k.as_ref();
+            for &kc in &dk_nonzero {
+                for (&i, &v) in ak.row_idx_of_col_raw(kc).iter().zip(ak.val_of_col(kc)) {
+                    for col in 0..c {
+                        r[i * c + col] -= v * dk[(kc, col)];
+                    }
+                    if !touched[i] {
+                        touched[i] = true;
+                        list.push(i);
+                    }
                 }
             }
             if let Some(bt) = bt {
@@ -386,12 +407,25 @@ impl FactoredQuadratic {
                 }
                 for i in 0..p.rows {
                     for col in 0..c {
-                        r[(i, col)] += bt[(i, col)];
+                        let v = bt[(i, col)];
+                        if v != 0.0 {
+                            r[i * c + col] += v;
+                            if !touched[i] {
+                                touched[i] = true;
+                                list.push(i);
+                            }
+                        }
                     }
                 }
             }
-            let add_rhs = sparse_mul_dense(p.at_w.as_ref(), r.as_ref())?;
-            rhs += add_rhs;
+            let at = p.at_w.as_ref();
+            for &i in &list {
+                for (&u, &v) in at.row_idx_of_col_raw(i).iter().zip(at.val_of_col(i)) {
+                    for col in 0..c {
+                        rhs[(u, col)] += v * r[i * c + col];
+                    }
+                }
+            }
         }
         self.chol.solve_in_place(rhs.as_mut())?;
         let mut x = Mat::zeros(self.n, c);
