@@ -19,7 +19,12 @@ fn main() {
     let methods: Vec<Method> = if args.len() > 2 {
         args[2..].iter().filter_map(|m| m.parse().ok()).collect()
     } else {
-        vec![Method::Naive, Method::Poisson, Method::Implicit, Method::Lse]
+        vec![
+            Method::Naive,
+            Method::Poisson,
+            Method::Implicit,
+            Method::Lse,
+        ]
     };
     let mut level = 1;
     while 10 * 4usize.pow(level) + 2 < roi * 5 / 4 {

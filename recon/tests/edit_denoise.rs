@@ -54,7 +54,10 @@ fn denoising_a_noisy_sphere_gets_three_times_closer_and_keeps_volume() {
         "without volume preservation: rms {:.3e}, volume change {dv_raw:+.2e}",
         rms_distance_to_unit_sphere(&raw)
     );
-    println!("rms distance before {before:.3e} after {after:.3e} (×{:.1}), volume change {dv:.2e}", before / after);
+    println!(
+        "rms distance before {before:.3e} after {after:.3e} (×{:.1}), volume change {dv:.2e}",
+        before / after
+    );
     assert!(after * 3.0 <= before, "{before} → {after}");
     assert!(dv <= 0.01, "volume changed by {dv}");
 }

@@ -21,7 +21,10 @@ fn full_spec_parses_and_transform_order_is_scale_rotate_translate() {
     let t = p.spec_transforms[0];
     // (2, 0, 0): scale about (1,0,0) → (3,0,0); rotate 90° about z there → (1,2,0); +z.
     let q = t.apply(fires_recon::Vec3::new(2.0, 0.0, 0.0));
-    assert!(q.distance(fires_recon::Vec3::new(1.0, 2.0, 1.0)) < 1e-12, "{q:?}");
+    assert!(
+        q.distance(fires_recon::Vec3::new(1.0, 2.0, 1.0)) < 1e-12,
+        "{q:?}"
+    );
     assert_eq!(p.role[p.local[0]], Role::Anchor);
     assert!(p.handles[0].fix_gradient && p.handles[0].weight == 3.0);
     let back = EditSpec::from_json(&spec.to_json()).unwrap();
@@ -50,20 +53,38 @@ fn clear_errors() {
         EditSpec::from_json(json).and_then(|s| EditProblem::new(&mesh, &s).map(|_| ()))
     };
     let e = err(r#"{"roi": "all", "handles": [], "colour": 1}"#).unwrap_err();
-    assert!(matches!(&e, EditError::Spec(m) if m.contains("colour")), "{e}");
+    assert!(
+        matches!(&e, EditError::Spec(m) if m.contains("colour")),
+        "{e}"
+    );
     let e = err(r#"{"roi": "all", "handles": [{"select": "all", "transform": {"rotate": {"axis": [0,0,1], "deg": 3, "extra": 1}}}]}"#).unwrap_err();
-    assert!(matches!(&e, EditError::Spec(m) if m.contains("extra")), "{e}");
+    assert!(
+        matches!(&e, EditError::Spec(m) if m.contains("extra")),
+        "{e}"
+    );
     let e = err(r#"{"roi": {"sphere": {"center": [9, 9, 9], "radius": 0.1}}, "handles": []}"#)
         .unwrap_err();
     assert_eq!(e, EditError::EmptySelection("roi".into()));
     let e = err(r#"{"roi": {"box": {"min": [-2, -2, 1], "max": [2, 2, 3]}},
         "handles": [{"select": {"vertices": [0]}}]}"#)
     .unwrap_err();
-    assert_eq!(e, EditError::HandleOutsideRoi { handle: 0, vertex: 0 });
+    assert_eq!(
+        e,
+        EditError::HandleOutsideRoi {
+            handle: 0,
+            vertex: 0
+        }
+    );
     let e = err(r#"{"roi": "all", "handles": [{"select": {"vertices": [0]}}]}"#).unwrap_err();
     assert_eq!(e, EditError::NothingFixed);
     let e = err(r#"{"roi": "all", "anchors": {"vertices": [5]}, "handles": [{"select": {"vertices": [5]}}]}"#).unwrap_err();
-    assert_eq!(e, EditError::HandleIsAnchor { handle: 0, vertex: 5 });
+    assert_eq!(
+        e,
+        EditError::HandleIsAnchor {
+            handle: 0,
+            vertex: 5
+        }
+    );
     let e = err(r#"{"roi": "all", "anchors": {"vertices": [99999]}, "handles": []}"#).unwrap_err();
     assert!(matches!(e, EditError::InvalidVertex { index: 99999, .. }));
     let e = err(r#"{"roi": "all", "anchors": {"vertices": [1]}, "handles": [{"select": {"vertices": [3]}, "transform": {"rotate": {"axis": [0,0,0], "deg": 3}}}]}"#).unwrap_err();

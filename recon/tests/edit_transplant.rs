@@ -49,9 +49,16 @@ fn transplanted_bump_is_watertight() {
     assert_eq!(out.mesh.euler_characteristic(), 2);
     assert!(out.seam_faces > 0);
     assert!(out.mesh.positions().iter().all(|p| p.is_finite()));
-    let x: Vec<Vec3> = out.patch_vertices.iter().map(|&v| out.mesh.positions()[v]).collect();
+    let x: Vec<Vec3> = out
+        .patch_vertices
+        .iter()
+        .map(|&v| out.mesh.positions()[v])
+        .collect();
     let e = detail_error(&rest_patch, &x, None).unwrap();
-    println!("transplant: {} seam triangles, patch detail_error {e:.3e}", out.seam_faces);
+    println!(
+        "transplant: {} seam triangles, patch detail_error {e:.3e}",
+        out.seam_faces
+    );
     assert!(e < 0.05);
     assert!(TransplantSpec::from_json(r#"{"region": "all", "rings": 2}"#).is_err());
 }

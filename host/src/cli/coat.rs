@@ -56,6 +56,9 @@ pub fn run(args: &CoatArgs) -> anyhow::Result<()> {
     if let Some(png) = &args.png {
         save_before_after(png, &base, base.positions(), &x)?;
     }
-    println!("{}", serde_json::json!({"vertices": base.n_vertices(), "ms": ms}));
+    println!(
+        "{}",
+        serde_json::json!({"vertices": base.n_vertices(), "ms": ms})
+    );
     Ok(())
 }

@@ -53,12 +53,21 @@ pub fn run(args: &TransplantArgs) -> anyhow::Result<()> {
     if let Some(png) = &args.png {
         let o = RenderOptions::default();
         let mut before = Scene::default();
-        before.meshes.push(SceneMesh::from_mesh(&target, [170, 170, 190]));
-        before.meshes.push(SceneMesh::from_mesh(&patch, [220, 120, 90]));
+        before
+            .meshes
+            .push(SceneMesh::from_mesh(&target, [170, 170, 190]));
+        before
+            .meshes
+            .push(SceneMesh::from_mesh(&patch, [220, 120, 90]));
         let mut after = Scene::default();
-        after.meshes.push(SceneMesh::from_mesh(&out.mesh, [200, 160, 110]));
-        save_png(&side_by_side(&[render(&before, &o), render(&after, &o)]), png)
-            .with_context(|| format!("writing {}", png.display()))?;
+        after
+            .meshes
+            .push(SceneMesh::from_mesh(&out.mesh, [200, 160, 110]));
+        save_png(
+            &side_by_side(&[render(&before, &o), render(&after, &o)]),
+            png,
+        )
+        .with_context(|| format!("writing {}", png.display()))?;
     }
     println!(
         "{}",

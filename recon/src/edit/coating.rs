@@ -20,7 +20,9 @@ use super::EditError;
 use crate::geometry::Vec3;
 use crate::mesh::{SurfaceMesh, Vertex};
 use crate::operators::{vertex_normals, NormalWeighting};
-use crate::solve::{sparse_from_triplets, sparse_mul_dense, CholeskyOptions, FixedSolver, SparseMatrix};
+use crate::solve::{
+    sparse_from_triplets, sparse_mul_dense, CholeskyOptions, FixedSolver, SparseMatrix,
+};
 
 /// Options of [`coat`] and [`smooth_base`].
 #[derive(Debug, Clone, Copy)]
@@ -133,7 +135,8 @@ pub fn coat_with_base(
         return Err(EditError::Mismatch("position counts differ".into()));
     }
     let (k, d) = graph_laplacian(detailed)?;
-    let lap = |x: &[Vec3]| sparse_mul_dense(k.as_ref(), Mat::from_fn(n, 3, |i, c| x[i][c]).as_ref());
+    let lap =
+        |x: &[Vec3]| sparse_mul_dense(k.as_ref(), Mat::from_fn(n, 3, |i, c| x[i][c]).as_ref());
     let ds = lap(detailed.positions())?;
     let dsm = lap(smooth)?;
     let du = lap(base)?;

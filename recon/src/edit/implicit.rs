@@ -130,7 +130,11 @@ fn fit(x: &[Vec3], stencil: &[usize]) -> (f64, Option<Vec<[f64; 3]>>) {
         .enumerate()
         .map(|(m, row)| {
             let a = if m == 0 { 0.0 } else { 1.0 / k as f64 };
-            [row[0] - a * sum[0], row[1] - a * sum[1], row[2] - a * sum[2]]
+            [
+                row[0] - a * sum[0],
+                row[1] - a * sum[1],
+                row[2] - a * sum[2],
+            ]
         })
         .collect();
     (cond, Some(q))
@@ -295,7 +299,8 @@ impl EditMethod for ImplicitEditor {
             let (cond, _) = fit(&x, &stencil[i]);
             if cond > DEGENERATE_COND {
                 let nb = &problem.neighbors[i];
-                let mean = nb.iter().map(|&j| x[i].distance(x[j])).sum::<f64>() / nb.len().max(1) as f64;
+                let mean =
+                    nb.iter().map(|&j| x[i].distance(x[j])).sum::<f64>() / nb.len().max(1) as f64;
                 x[i] += normals[i] * (options.s_disp * mean);
                 n_degenerate += 1;
             }
@@ -328,7 +333,11 @@ impl EditMethod for ImplicitEditor {
             }
         }
         let delta: Vec<Vec3> = (0..n_roi)
-            .map(|i| lap[i].iter().fold(Vec3::ZERO, |a, &(j, v)| a + (x[j] - x[i]) * v))
+            .map(|i| {
+                lap[i]
+                    .iter()
+                    .fold(Vec3::ZERO, |a, &(j, v)| a + (x[j] - x[i]) * v)
+            })
             .collect();
         let fixed_grad = |i: usize| match problem.role[i] {
             Role::Handle(h) => problem.handles[h].fix_gradient,
@@ -346,7 +355,8 @@ impl EditMethod for ImplicitEditor {
             }
             if !fixed_grad(i) {
                 for (m, &s) in stencil[i].iter().enumerate() {
-                    let qd = q[i][m][0] * delta[i].x + q[i][m][1] * delta[i].y + q[i][m][2] * delta[i].z;
+                    let qd =
+                        q[i][m][0] * delta[i].x + q[i][m][1] * delta[i].y + q[i][m][2] * delta[i].z;
                     entries.push((s, -qd));
                 }
             }
@@ -354,8 +364,8 @@ impl EditMethod for ImplicitEditor {
             for c in 0..3 {
                 entries.clear();
                 if !fixed_grad(i) {
-                    for (m, &s) in stencil[i].iter().enumerate() {
-                        entries.push((s, q[i][m][c]));
+                    for (&s, qm_row) in stencil[i].iter().zip(&q[i]) {
+                        entries.push((s, qm_row[c]));
                     }
                 }
                 qm.push(&entries)?;
@@ -402,9 +412,15 @@ impl EditMethod for ImplicitEditor {
         let x0 = Mat::from_fn(n, 3, |i, c| x[i][c]);
         let first = FactoredQuadratic::new(n, &terms, &problem.constrained(), Some(x0))?;
         let k = cotan_stiffness(problem)?;
-        let kv = sparse_mul_dense(k.as_ref(), Mat::from_fn(n, 3, |i, c| problem.rest[i][c]).as_ref())?;
-        let second =
-            FixedSolver::precompute(k.as_ref(), &problem.constrained(), CholeskyOptions::default())?;
+        let kv = sparse_mul_dense(
+            k.as_ref(),
+            Mat::from_fn(n, 3, |i, c| problem.rest[i][c]).as_ref(),
+        )?;
+        let second = FixedSolver::precompute(
+            k.as_ref(),
+            &problem.constrained(),
+            CholeskyOptions::default(),
+        )?;
         Ok(Self {
             first,
             second,

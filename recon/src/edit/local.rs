@@ -27,8 +27,11 @@ pub fn cotan_weights(p: &EditProblem, clamp_negative: bool) -> Vec<(usize, usize
         for &(i, j, w) in &t {
             *sums.entry((i, j)).or_insert(0.0) += w;
         }
-        t = sums.into_iter().map(|((i, j), w)| (i, j, f64::max(w, 0.0))).collect();
-        t.sort_unstable_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+        t = sums
+            .into_iter()
+            .map(|((i, j), w)| (i, j, f64::max(w, 0.0)))
+            .collect();
+        t.sort_unstable_by_key(|a| (a.0, a.1));
     }
     t
 }

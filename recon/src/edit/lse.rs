@@ -137,12 +137,15 @@ fn soft_rows(problem: &EditProblem) -> (Vec<(usize, f64)>, RowBuilder) {
     (soft, b)
 }
 
+/// Quadratic terms and constant right-hand-side entries `(row, value)`.
+type Terms = (Vec<QuadTerm>, Vec<(usize, f64)>);
+
 /// The two terms (Laplacian rows, soft rows) and the constant right-hand side entries of
 /// the Laplacian rows (collinear 1-rings only).
 fn terms(
     problem: &EditProblem,
     rot: &[Mat3],
-) -> Result<(Vec<QuadTerm>, Vec<(usize, f64)>), EditError> {
+) -> Result<Terms, EditError> {
     let mut rhs = Vec::new();
     let lap = laplacian_rows(problem, rot, &mut rhs)?.finish()?;
     let (_, s) = soft_rows(problem);
@@ -193,7 +196,10 @@ impl LseEditor {
             let d = system.known()[r];
             targets[d / 3][d % 3]
         });
-        let x = system.solve(&[lap_b.as_ref().map(|m| m.as_ref()), Some(b.as_ref())], known.as_ref())?;
+        let x = system.solve(
+            &[lap_b.as_ref().map(|m| m.as_ref()), Some(b.as_ref())],
+            known.as_ref(),
+        )?;
         Ok((0..problem.len())
             .map(|l| Vec3::new(x[(3 * l, 0)], x[(3 * l + 1, 0)], x[(3 * l + 2, 0)]))
             .collect())

@@ -35,8 +35,11 @@ impl NaiveLaplacian {
         coords: &[Vec3],
     ) -> Result<Vec<Vec3>, EditError> {
         let k = graph_laplacian(problem)?;
-        let solver =
-            FixedSolver::precompute(k.as_ref(), &problem.constrained(), CholeskyOptions::default())?;
+        let solver = FixedSolver::precompute(
+            k.as_ref(),
+            &problem.constrained(),
+            CholeskyOptions::default(),
+        )?;
         let b = Mat::from_fn(problem.len(), 3, |l, c| {
             coords.get(problem.global[l]).map_or(0.0, |v| v[c])
         });
@@ -52,8 +55,11 @@ impl EditMethod for NaiveLaplacian {
     fn factor(problem: &EditProblem, _: &NaiveOptions) -> Result<Self, EditError> {
         let k = graph_laplacian(problem)?;
         let delta = sparse_mul_dense(k.as_ref(), to_mat(&problem.rest).as_ref())?;
-        let solver =
-            FixedSolver::precompute(k.as_ref(), &problem.constrained(), CholeskyOptions::default())?;
+        let solver = FixedSolver::precompute(
+            k.as_ref(),
+            &problem.constrained(),
+            CholeskyOptions::default(),
+        )?;
         Ok(Self { solver, delta })
     }
 

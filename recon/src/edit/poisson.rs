@@ -103,7 +103,10 @@ impl PoissonEditor {
                 Role::Free => {
                     let w = &self.weights[l];
                     if let Some((axis, angle, log_s)) = single {
-                        return (UnitQuaternion::from_axis_angle(&axis, w[1] * angle), w[1] * log_s);
+                        return (
+                            UnitQuaternion::from_axis_angle(&axis, w[1] * angle),
+                            w[1] * log_s,
+                        );
                     }
                     let mut items = Vec::with_capacity(w.len());
                     items.push((UnitQuaternion::identity(), w[0]));
@@ -122,10 +125,7 @@ impl PoissonEditor {
     /// normalised, hemisphere-aligned sum of the three vertex quaternions (the chordal
     /// mean, equal to the sequential slerp average to second order in their spread and
     /// exact when they agree), `σ_T` their geometric mean.
-    pub fn face_maps(
-        problem: &EditProblem,
-        vertex: &[(UnitQuaternion<f64>, f64)],
-    ) -> Vec<Mat3> {
+    pub fn face_maps(problem: &EditProblem, vertex: &[(UnitQuaternion<f64>, f64)]) -> Vec<Mat3> {
         problem
             .faces
             .iter()
@@ -136,7 +136,9 @@ impl PoissonEditor {
                     let qv = vertex[v].0.into_inner();
                     q += if q0.dot(&qv) < 0.0 { -qv } else { qv };
                 }
-                let r = UnitQuaternion::new_normalize(q).to_rotation_matrix().into_inner();
+                let r = UnitQuaternion::new_normalize(q)
+                    .to_rotation_matrix()
+                    .into_inner();
                 let ls = vertex[f[0]].1 + vertex[f[1]].1 + vertex[f[2]].1;
                 if ls == 0.0 {
                     r
@@ -153,8 +155,11 @@ impl EditMethod for PoissonEditor {
 
     fn factor(problem: &EditProblem, options: &PoissonOptions) -> Result<Self, EditError> {
         let k = cotan_stiffness(problem)?;
-        let solver =
-            FixedSolver::precompute(k.as_ref(), &problem.constrained(), CholeskyOptions::default())?;
+        let solver = FixedSolver::precompute(
+            k.as_ref(),
+            &problem.constrained(),
+            CholeskyOptions::default(),
+        )?;
         let grads = face_gradients(problem, &problem.rest);
         let fixed: Vec<usize> = (0..problem.len())
             .filter(|&l| matches!(problem.role[l], Role::Ring | Role::Anchor))

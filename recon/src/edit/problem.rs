@@ -134,7 +134,12 @@ impl EditProblem {
                     });
                 }
                 match role[l] {
-                    Role::Anchor => return Err(EditError::HandleIsAnchor { handle: h, vertex: g }),
+                    Role::Anchor => {
+                        return Err(EditError::HandleIsAnchor {
+                            handle: h,
+                            vertex: g,
+                        })
+                    }
                     Role::Handle(o) => {
                         return Err(EditError::HandlesOverlap {
                             first: o,
@@ -158,7 +163,9 @@ impl EditProblem {
             });
         }
         if !(spec.anchor_weight.is_finite() && spec.anchor_weight > 0.0) {
-            return Err(EditError::Spec("anchor_weight must be a finite number > 0".into()));
+            return Err(EditError::Spec(
+                "anchor_weight must be a finite number > 0".into(),
+            ));
         }
         if !role.iter().any(|r| matches!(r, Role::Ring | Role::Anchor)) {
             return Err(EditError::NothingFixed);
@@ -215,7 +222,9 @@ impl EditProblem {
 
     /// Local indices of all hard-constrained vertices (ring, anchors, handles), ascending.
     pub fn constrained(&self) -> Vec<usize> {
-        (0..self.len()).filter(|&l| self.is_constrained(l)).collect()
+        (0..self.len())
+            .filter(|&l| self.is_constrained(l))
+            .collect()
     }
 
     /// Target position of every local vertex under the handle transforms (rest elsewhere).

@@ -103,7 +103,12 @@ pub fn edit_mesh(
     let p = EditProblem::new(mesh, spec)?;
     let build_ms = ms(t);
     let (local, factor_ms, solve_ms) = match method {
-        Method::Lse => timed::<LseEditor>(&p, &LseOptions { refit_iterations: 2 })?,
+        Method::Lse => timed::<LseEditor>(
+            &p,
+            &LseOptions {
+                refit_iterations: 2,
+            },
+        )?,
         Method::Poisson => timed::<PoissonEditor>(&p, &Default::default())?,
         Method::Implicit => timed::<ImplicitEditor>(&p, &Default::default())?,
         Method::Naive => timed::<NaiveLaplacian>(&p, &Default::default())?,

@@ -53,7 +53,11 @@ pub struct EditSession<M: EditMethod> {
 
 impl<M: EditMethod> EditSession<M> {
     /// Resolves the specification and factors the method's systems.
-    pub fn new(mesh: &SurfaceMesh, spec: &EditSpec, options: M::Options) -> Result<Self, EditError> {
+    pub fn new(
+        mesh: &SurfaceMesh,
+        spec: &EditSpec,
+        options: M::Options,
+    ) -> Result<Self, EditError> {
         let problem = EditProblem::new(mesh, spec)?;
         let t = Instant::now();
         let method = M::factor(&problem, &options)?;

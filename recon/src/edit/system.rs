@@ -369,7 +369,9 @@ impl FactoredQuadratic {
             ));
         }
         if self.x0.as_ref().is_some_and(|x| x.ncols() != c) {
-            return Err(SolveError::Dimension("reference has the wrong width".into()));
+            return Err(SolveError::Dimension(
+                "reference has the wrong width".into(),
+            ));
         }
         // Fixed values relative to the reference.
         let dk = Mat::from_fn(self.known.len(), c, |r, col| {

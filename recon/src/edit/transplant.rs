@@ -157,7 +157,11 @@ pub fn transplant(
     };
     let hole: Vec<usize> = loops
         .iter()
-        .map(|l| l.iter().map(|&h| cut.to_vertex(h).idx()).collect::<Vec<_>>())
+        .map(|l| {
+            l.iter()
+                .map(|&h| cut.to_vertex(h).idx())
+                .collect::<Vec<_>>()
+        })
         .find(|l: &Vec<usize>| l.iter().any(|&v| touches[v]))
         .ok_or_else(|| EditError::Mismatch("no hole next to the region".into()))?;
     let ploop = single_loop(patch, "the patch")?;
@@ -244,12 +248,12 @@ pub fn transplant(
     // Laplacian coordinates `Σ (x_i − x_j)` of the unzipped parts; 0 on the seam loops.
     let mut own = vec![Vec3::ZERO; merged.vertices_size()];
     let on_seam: std::collections::HashSet<usize> = seam.iter().copied().collect();
-    for v in 0..merged.vertices_size() {
+    for (v, o) in own.iter_mut().enumerate() {
         if on_seam.contains(&v) {
             continue;
         }
         let p = merged.positions()[v];
-        own[v] = merged
+        *o = merged
             .vertex_vertices(Vertex::new(v))
             .fold(Vec3::ZERO, |a, w| a + (p - merged.positions()[w.idx()]));
     }

@@ -76,21 +76,36 @@ fn shade(color: [u8; 3], intensity: f64) -> Rgb<u8> {
     Rgb(color.map(|c| (c as f64 * intensity).round().clamp(0.0, 255.0) as u8))
 }
 
-fn raster_triangle(
-    img: &mut RgbImage,
-    zbuf: &mut [f64],
-    p: [(f64, f64, f64); 3],
-    color: Rgb<u8>,
-) {
+fn raster_triangle(img: &mut RgbImage, zbuf: &mut [f64], p: [(f64, f64, f64); 3], color: Rgb<u8>) {
     let (w, h) = (img.width() as i64, img.height() as i64);
     let area = (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[2].0 - p[0].0) * (p[1].1 - p[0].1);
     if area.abs() < 1e-12 || !area.is_finite() {
         return;
     }
-    let xmin = p.iter().map(|q| q.0).fold(f64::INFINITY, f64::min).floor().max(0.0) as i64;
-    let xmax = p.iter().map(|q| q.0).fold(f64::NEG_INFINITY, f64::max).ceil().min((w - 1) as f64) as i64;
-    let ymin = p.iter().map(|q| q.1).fold(f64::INFINITY, f64::min).floor().max(0.0) as i64;
-    let ymax = p.iter().map(|q| q.1).fold(f64::NEG_INFINITY, f64::max).ceil().min((h - 1) as f64) as i64;
+    let xmin = p
+        .iter()
+        .map(|q| q.0)
+        .fold(f64::INFINITY, f64::min)
+        .floor()
+        .max(0.0) as i64;
+    let xmax = p
+        .iter()
+        .map(|q| q.0)
+        .fold(f64::NEG_INFINITY, f64::max)
+        .ceil()
+        .min((w - 1) as f64) as i64;
+    let ymin = p
+        .iter()
+        .map(|q| q.1)
+        .fold(f64::INFINITY, f64::min)
+        .floor()
+        .max(0.0) as i64;
+    let ymax = p
+        .iter()
+        .map(|q| q.1)
+        .fold(f64::NEG_INFINITY, f64::max)
+        .ceil()
+        .min((h - 1) as f64) as i64;
     for y in ymin..=ymax {
         for x in xmin..=xmax {
             let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
@@ -140,7 +155,14 @@ pub fn render(scene: &Scene, o: &RenderOptions) -> RgbImage {
     let (w, h) = (o.width.max(1), o.height.max(1));
     let mut img = RgbImage::from_pixel(w, h, Rgb(o.background));
     let mut zbuf = vec![f64::INFINITY; (w as usize) * (h as usize)];
-    let view = View::new(scene, &RenderOptions { width: w, height: h, ..*o });
+    let view = View::new(
+        scene,
+        &RenderOptions {
+            width: w,
+            height: h,
+            ..*o
+        },
+    );
     let light = o.light.try_normalize().unwrap_or(view.forward);
     for m in &scene.meshes {
         let proj: Vec<_> = m.positions.iter().map(|&p| view.project(p)).collect();
@@ -157,7 +179,12 @@ pub fn render(scene: &Scene, o: &RenderOptions) -> RgbImage {
             let lambert = n.dot(light).abs();
             let color = shade(m.color, o.ambient + (1.0 - o.ambient) * lambert);
             for k in 1..f.len() - 1 {
-                raster_triangle(&mut img, &mut zbuf, [proj[f[0]], proj[f[k]], proj[f[k + 1]]], color);
+                raster_triangle(
+                    &mut img,
+                    &mut zbuf,
+                    [proj[f[0]], proj[f[k]], proj[f[k + 1]]],
+                    color,
+                );
             }
         }
     }

@@ -65,5 +65,8 @@ pub fn bbox_diag(x: &[Vec3]) -> f64 {
 
 /// Largest distance between corresponding points.
 pub fn max_dist(a: &[Vec3], b: &[Vec3]) -> f64 {
-    a.iter().zip(b).map(|(p, q)| p.distance(*q)).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| p.distance(*q))
+        .fold(0.0, f64::max)
 }
