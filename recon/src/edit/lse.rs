@@ -142,10 +142,7 @@ type Terms = (Vec<QuadTerm>, Vec<(usize, f64)>);
 
 /// The two terms (Laplacian rows, soft rows) and the constant right-hand side entries of
 /// the Laplacian rows (collinear 1-rings only).
-fn terms(
-    problem: &EditProblem,
-    rot: &[Mat3],
-) -> Result<Terms, EditError> {
+fn terms(problem: &EditProblem, rot: &[Mat3]) -> Result<Terms, EditError> {
     let mut rhs = Vec::new();
     let lap = laplacian_rows(problem, rot, &mut rhs)?.finish()?;
     let (_, s) = soft_rows(problem);
