@@ -127,3 +127,22 @@ fn twist_detail_errors_beat_naive() {
     assert!(lse2 < naive);
     assert!(implicit < naive);
 }
+
+#[test]
+fn lse_affine_basis_equals_the_solve() {
+    let mesh = relief_cylinder();
+    let spec = twist_spec(0.0);
+    let p = EditProblem::new(&mesh, &spec).unwrap();
+    let lse = LseEditor::factor(&p, &LseOptions::default()).unwrap();
+    let mut lse_solve = lse.clone();
+    let basis = lse.precompute_basis(&p).unwrap();
+    let t = vec![Similarity {
+        scale: 1.3,
+        rotation: axis_angle(Vec3::new(0.1, 0.4, 1.0), 50.0).unwrap(),
+        about: Vec3::new(0.0, 0.0, 4.0),
+        translate: Vec3::new(0.2, 0.1, -0.3),
+    }];
+    let a = LseEditor::solve_basis(&basis, &p, &t).unwrap();
+    let b = lse_solve.solve(&p, &t).unwrap();
+    assert!(max_dist(&a, &b) / bbox_diag(&b) < 1e-10);
+}

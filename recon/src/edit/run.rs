@@ -146,6 +146,12 @@ pub struct BenchEditReport {
     pub cotan_factor_ms: f64,
     /// Stored entries of the method's main factor (0 when not tracked).
     pub factor_entries: usize,
+    /// LSE only: time to precompute the 12 affine responses per handle, ms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub basis_ms: Option<f64>,
+    /// LSE only: median move from the precomputed affine responses (no solve), ms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub per_move_basis_ms: Option<f64>,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -259,8 +265,25 @@ pub fn bench_edit(
         cs.push(ms(t));
         std::hint::black_box(rhs);
     }
+    let mut basis_ms = None;
+    let mut per_move_basis_ms = None;
     let (factor_ms, per, entries) = match method {
-        Method::Lse => bench_method::<LseEditor>(&p, &LseOptions::default(), moves, scale)?,
+        Method::Lse => {
+            let r = bench_method::<LseEditor>(&p, &LseOptions::default(), moves, scale)?;
+            let lse = LseEditor::factor(&p, &LseOptions::default())?;
+            let t = Instant::now();
+            let basis = lse.precompute_basis(&p)?;
+            basis_ms = Some(ms(t));
+            let mut per = Vec::new();
+            for k in 0..moves.max(1) {
+                let tr = bench_move(&p, k + 1, scale);
+                let t = Instant::now();
+                std::hint::black_box(LseEditor::solve_basis(&basis, &p, &tr)?);
+                per.push(ms(t));
+            }
+            per_move_basis_ms = Some(median(per));
+            r
+        }
         Method::Poisson => bench_method::<PoissonEditor>(&p, &Default::default(), moves, scale)?,
         Method::Implicit => bench_method::<ImplicitEditor>(
             &p,
@@ -281,5 +304,7 @@ pub fn bench_edit(
         cotan_solve_ms: median(cs),
         cotan_factor_ms,
         factor_entries: entries,
+        basis_ms,
+        per_move_basis_ms,
     })
 }
