@@ -34,10 +34,37 @@ enum BenchKind {
         #[arg(long, default_value_t = 5)]
         runs: usize,
     },
+    /// Factor one editing ROI and time repeated handle moves against the ROI's plain cotangent solve.
+    Edit {
+        /// Triangle mesh (OBJ, OFF, PLY, STL).
+        mesh: PathBuf,
+        /// Editing method.
+        #[arg(long, value_enum)]
+        method: super::edit::MethodArg,
+        /// Fraction of the vertices in the ROI (a geodesic ball around vertex 0).
+        #[arg(long, default_value_t = 0.5)]
+        roi_fraction: f64,
+        /// Handle moves timed after the factorisation.
+        #[arg(long, default_value_t = 10)]
+        moves: usize,
+    },
 }
 
 /// Runs the benchmark and prints its JSON line.
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    if let BenchKind::Edit {
+        mesh,
+        method,
+        roi_fraction,
+        moves,
+    } = &args.what
+    {
+        let m = super::edit::load_mesh(mesh)?;
+        let r = fires_recon::edit::bench_edit(&m, method.method(), *roi_fraction, *moves)
+            .with_context(|| format!("edit benchmark of {}", mesh.display()))?;
+        println!("{}", serde_json::to_string(&r)?);
+        return Ok(());
+    }
     let timings = match &args.what {
         BenchKind::Solve { matrix, runs } => bench_solve_matrix_market(matrix, *runs)
             .with_context(|| format!("benchmark of {}", matrix.display()))?,
@@ -54,6 +81,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             }
             timings
         }
+        BenchKind::Edit { .. } => anyhow::bail!("edit benchmark handled above"),
     };
     println!("{}", timings.to_json_line());
     Ok(())

@@ -37,6 +37,14 @@ enum Command {
     Track(cli::track::TrackArgs),
     /// Calibrate the stereo rig from chessboard image pairs (needs the `opencv` feature).
     Calibrate(cli::calibrate::CalibrateArgs),
+    /// Edit a mesh by a JSON specification: Laplacian surface, Poisson, implicit or naive Laplacian editing.
+    Edit(cli::edit::EditArgs),
+    /// Transfer the detail of one mesh onto another of the same connectivity (coating transfer).
+    Coat(cli::coat::CoatArgs),
+    /// Replace a region of a mesh by a patch, blended with Laplacian coordinates.
+    Transplant(cli::transplant::TransplantArgs),
+    /// Denoise a mesh by filtering its gradient field (bilateral normal filter + Poisson solve).
+    Denoise(cli::denoise::DenoiseArgs),
     /// Fit the pen-tip offset from a recording of the pivot gesture (tip held still, pen turned).
     Pivot(cli::pivot::PivotArgs),
     /// Inspect a mesh file: counts, topology and what reading it repaired (one JSON line).
@@ -55,6 +63,10 @@ fn main() -> ExitCode {
         Command::Track(args) => cli::track::run(args),
         Command::Pivot(args) => cli::pivot::run(args),
         Command::Mesh(args) => cli::mesh::run(args),
+        Command::Edit(args) => cli::edit::run(args),
+        Command::Coat(args) => cli::coat::run(args),
+        Command::Transplant(args) => cli::transplant::run(args),
+        Command::Denoise(args) => cli::denoise::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -10,14 +10,20 @@
 //! * [`solve`]: sparse Cholesky with symbolic reuse, fixed-value (Dirichlet) elimination and
 //!   stacked least squares (libigl's precompute/solve split);
 //! * [`subdivide`]: Loop subdivision;
+//! * [`edit`]: differential mesh editing (Laplacian surface editing, Poisson gradient
+//!   editing, implicit Laplacian editing, naive Laplacian baseline, coating, transplanting,
+//!   denoising) and the normalised ARAP `detail_error`;
+//! * [`render`]: a small software rasteriser writing PNG images;
 //! * [`mod@bench`]: solver timing used by `fires bench solve|laplacian`.
 
 pub mod bench;
+pub mod edit;
 pub mod generate;
 pub mod geometry;
 pub mod io;
 pub mod mesh;
 pub mod operators;
+pub mod render;
 pub mod solve;
 pub mod subdivide;
 

@@ -1,0 +1,463 @@
+//! Implicit Laplacian editing with derived similarity transforms (Fu, *Differential Methods
+//! for Intuitive 3D Shape Modeling*, ch. 2, §2.4).
+//!
+//! Each ROI vertex gets the affine deformation gradient fitted to its 1-ring (Eq. 2.5),
+//! linear in the unknown positions: `Mᵢ = Xᵢ Qᵢ` with the constant `Qᵢ = Gᵢ Vᵢᵀ(VᵢVᵢᵀ)⁻¹`.
+//! The first system minimises `E_L + μ E_R` (Eqs. 2.6–2.8): `E_L = Σ ‖D(x′)ᵢ − Mᵢ δᵢ‖²`
+//! (cotangent weights clamped at 0 and normalised to sum 1) and the coherence
+//! `E_R = Σ_{2-ring pairs} ‖Mᵢ − Mⱼ‖²_F`, with `μ = coherence_weight · ē²` (ē the mean
+//! edge length, which makes the energy scale-covariant). Positions of the ring, anchors and
+//! handles are hard; handles with `fix_gradient` also fix `Mᵢ = sR` (substituted into both
+//! terms). x, y and z share one matrix.
+//!
+//! Degenerate vertices (§2.4.3): a vertex whose `cond(VᵢVᵢᵀ) > 2e5` (a planar 1-ring) is
+//! displaced along its normal by `s_disp` times its mean edge length (Eq. 2.9), visiting
+//! vertices in index order with the already displaced positions; the system is built on
+//! the displaced mesh and each displaced free vertex is pulled back by its own gradient,
+//! `ṽᵢ = Mᵢ(vᵢ − vᵢ′) + ṽᵢ′`.
+//!
+//! Shear removal (§2.4.4): each `Mᵢ` of the first solution is replaced by its polar
+//! rotation `Rᵢ` (times `sᵢ = ‖Mᵢ‖_F/√3` with `scale_features`) and a second, cotangent
+//! Poisson system `K x = Rᵢ (K v)ᵢ` on the original mesh gives the result (Eqs. 2.10/2.11).
+//! Interactively [`ImplicitEditor::solve_drag`] runs the first system per drag and
+//! [`ImplicitEditor::solve_release`] the second on release.
+//!
+//! With no gradient constraint and all position constraints in one plane the first system
+//! is singular (`x ↦ x + m (n·x − d)` costs nothing); this is reported as an error.
+
+use faer::Mat;
+use nalgebra::{DMatrix, Matrix3};
+
+use super::local::{cotan_stiffness, cotan_weights, from_mat, gather};
+use super::problem::{EditProblem, Role};
+use super::session::EditMethod;
+use super::similarity::{mat_vec, polar_rotation, to_na, Mat3, Similarity};
+use super::system::{FactoredQuadratic, QuadTerm, RowBuilder};
+use super::EditError;
+use crate::geometry::{triangle_normal, Vec3};
+use crate::solve::{sparse_from_triplets, sparse_mul_dense, CholeskyOptions, FixedSolver};
+
+/// Condition number of `VᵢVᵢᵀ` above which a vertex is degenerate (Fu §2.4.3).
+pub const DEGENERATE_COND: f64 = 2e5;
+
+/// Options of [`ImplicitEditor`].
+#[derive(Debug, Clone, Copy)]
+pub struct ImplicitOptions {
+    /// Weight of the coherence term in units of the squared mean edge length.
+    pub coherence_weight: f64,
+    /// Displacement of degenerate vertices in mean incident edge lengths (`s_disp`).
+    pub s_disp: f64,
+    /// Run the shear-removal second solve (false: return the first system's result).
+    pub second_solve: bool,
+    /// Keep the fitted scale in the second solve (Eq. 2.11) instead of only the rotation.
+    pub scale_features: bool,
+}
+
+impl Default for ImplicitOptions {
+    fn default() -> Self {
+        Self {
+            coherence_weight: 1.0,
+            s_disp: 0.2,
+            second_solve: true,
+            scale_features: false,
+        }
+    }
+}
+
+/// Factored implicit Laplacian editing of one ROI.
+#[derive(Debug, Clone)]
+pub struct ImplicitEditor {
+    first: FactoredQuadratic,
+    second: FixedSolver,
+    /// Positions after the degenerate-vertex displacement.
+    displaced: Vec<Vec3>,
+    /// Stencil (vertex then 1-ring) and `Qᵢ` ((k+1) × 3, row-major) per ROI vertex.
+    stencil: Vec<Vec<usize>>,
+    q: Vec<Vec<[f64; 3]>>,
+    /// Laplacian coordinates of the displaced mesh, per ROI vertex.
+    delta: Vec<Vec3>,
+    /// `K v` of the original mesh (second system's rest coordinates).
+    kv: Mat<f64>,
+    /// Number of displaced (degenerate) vertices.
+    pub n_degenerate: usize,
+    /// Vertices still degenerate after the displacement pass.
+    pub n_still_degenerate: usize,
+    mu: f64,
+    options: ImplicitOptions,
+    last_first: Option<Vec<Vec3>>,
+}
+
+/// `cond(V Vᵀ)` and `Qᵢ` of vertex `i` for positions `x`.
+fn fit(x: &[Vec3], stencil: &[usize]) -> (f64, Option<Vec<[f64; 3]>>) {
+    let k = stencil.len() - 1;
+    if k == 0 {
+        return (f64::INFINITY, None);
+    }
+    let c0 = stencil[1..].iter().fold(Vec3::ZERO, |a, &j| a + x[j]) / k as f64;
+    let mut v = DMatrix::<f64>::zeros(3, k + 1);
+    for (m, &s) in stencil.iter().enumerate() {
+        let d = x[s] - c0;
+        for r in 0..3 {
+            v[(r, m)] = d[r];
+        }
+    }
+    let vvt: Matrix3<f64> = {
+        let p = &v * v.transpose();
+        Matrix3::from_fn(|r, c| p[(r, c)])
+    };
+    let eig = vvt.symmetric_eigenvalues();
+    let (lo, hi) = (eig.min(), eig.max());
+    let cond = if lo > 0.0 { hi / lo } else { f64::INFINITY };
+    let Some(inv) = vvt.try_inverse() else {
+        return (cond, None);
+    };
+    // P = Vᵀ (V Vᵀ)⁻¹, Q = P − a (1ᵀ P) with a = (0, 1/k, …, 1/k).
+    let p: Vec<[f64; 3]> = (0..=k)
+        .map(|m| {
+            let col = Matrix3::from_fn(|r, _| v[(r, m)]).column(0).into_owned();
+            let row = inv * col;
+            [row[0], row[1], row[2]]
+        })
+        .collect();
+    let mut sum = [0.0; 3];
+    for row in &p {
+        for c in 0..3 {
+            sum[c] += row[c];
+        }
+    }
+    let q = p
+        .iter()
+        .enumerate()
+        .map(|(m, row)| {
+            let a = if m == 0 { 0.0 } else { 1.0 / k as f64 };
+            [
+                row[0] - a * sum[0],
+                row[1] - a * sum[1],
+                row[2] - a * sum[2],
+            ]
+        })
+        .collect();
+    (cond, Some(q))
+}
+
+/// Area-weighted vertex normals of the local faces.
+fn local_normals(problem: &EditProblem) -> Vec<Vec3> {
+    let x = &problem.rest;
+    let mut n = vec![Vec3::ZERO; problem.len()];
+    for f in &problem.faces {
+        let fnrm = triangle_normal(x[f[0]], x[f[1]], x[f[2]]);
+        for &v in f {
+            n[v] += fnrm;
+        }
+    }
+    n.into_iter().map(Vec3::normalize_or_zero).collect()
+}
+
+/// Fails when no gradient is fixed and every position constraint lies in one plane.
+fn check_singular(problem: &EditProblem) -> Result<(), EditError> {
+    if problem.handles.iter().any(|h| h.fix_gradient) {
+        return Ok(());
+    }
+    let pts: Vec<Vec3> = problem
+        .constrained()
+        .iter()
+        .map(|&l| problem.rest[l])
+        .collect();
+    let c = pts.iter().fold(Vec3::ZERO, |a, &p| a + p) / pts.len().max(1) as f64;
+    let mut cov = Matrix3::<f64>::zeros();
+    for p in &pts {
+        let d = to_na(*p - c);
+        cov += d * d.transpose();
+    }
+    let eig = cov.symmetric_eigenvalues();
+    if eig.min() <= 1e-10 * eig.max().max(1e-300) {
+        return Err(EditError::Singular(
+            "implicit editing: every position constraint lies in one plane and no handle fixes \
+             its gradient (set \"fix_gradient\": true on a handle, or anchor off that plane)"
+                .into(),
+        ));
+    }
+    Ok(())
+}
+
+impl ImplicitEditor {
+    fn gradient_of(&self, i: usize, x: &[Vec3]) -> Mat3 {
+        let mut m = Mat3::zeros();
+        for (s, q) in self.stencil[i].iter().zip(&self.q[i]) {
+            for r in 0..3 {
+                for c in 0..3 {
+                    m[(r, c)] += x[*s][r] * q[c];
+                }
+            }
+        }
+        m
+    }
+
+    /// The first system (Eq. 2.8) with degenerate vertices pulled back: the positions shown
+    /// while a handle is dragged.
+    pub fn solve_drag(
+        &mut self,
+        problem: &EditProblem,
+        transforms: &[Similarity],
+    ) -> Result<Vec<Vec3>, EditError> {
+        problem.check_transforms(transforms)?;
+        let n_roi = problem.n_roi;
+        // Targets on the displaced geometry.
+        let targets: Vec<Vec3> = (0..problem.len())
+            .map(|l| match problem.role[l] {
+                Role::Handle(h) => transforms[h].apply(self.displaced[l]),
+                _ => self.displaced[l],
+            })
+            .collect();
+        let mut b_l = Mat::<f64>::zeros(n_roi, 3);
+        let mut m_c = Mat::<f64>::zeros(3 * n_roi, 3);
+        for i in 0..n_roi {
+            if let Role::Handle(h) = problem.role[i] {
+                if problem.handles[h].fix_gradient {
+                    let w = transforms[h].linear();
+                    let wd = mat_vec(&w, self.delta[i]);
+                    for r in 0..3 {
+                        b_l[(i, r)] = wd[r];
+                        for c in 0..3 {
+                            m_c[(3 * i + c, r)] = -w[(r, c)];
+                        }
+                    }
+                }
+            }
+        }
+        let known = gather(&targets, self.first.known());
+        let x = self
+            .first
+            .solve(&[Some(b_l.as_ref()), Some(m_c.as_ref())], known.as_ref())?;
+        let xd = from_mat(x.as_ref());
+        let mut out = xd.clone();
+        for l in 0..problem.len() {
+            match problem.role[l] {
+                Role::Free => {
+                    let off = problem.rest[l] - self.displaced[l];
+                    if off != Vec3::ZERO {
+                        out[l] = xd[l] + mat_vec(&self.gradient_of(l, &xd), off);
+                    }
+                }
+                Role::Handle(h) => out[l] = transforms[h].apply(problem.rest[l]),
+                _ => out[l] = problem.rest[l],
+            }
+        }
+        self.last_first = Some(xd);
+        Ok(out)
+    }
+
+    /// The shear-removal solve (Eq. 2.10, or 2.11 with `scale_features`) after
+    /// [`Self::solve_drag`] with the same transforms.
+    pub fn solve_release(
+        &mut self,
+        problem: &EditProblem,
+        transforms: &[Similarity],
+    ) -> Result<Vec<Vec3>, EditError> {
+        let Some(xd) = self.last_first.as_ref() else {
+            return self.solve(problem, transforms);
+        };
+        let targets = problem.targets(transforms)?;
+        let mut b = Mat::<f64>::zeros(problem.len(), 3);
+        for i in 0..problem.n_roi {
+            if problem.role[i] != Role::Free {
+                continue;
+            }
+            let (r, s) = polar_rotation(&self.gradient_of(i, xd));
+            let s = if self.options.scale_features { s } else { 1.0 };
+            let kv = Vec3::new(self.kv[(i, 0)], self.kv[(i, 1)], self.kv[(i, 2)]);
+            let v = mat_vec(&r, kv) * s;
+            for c in 0..3 {
+                b[(i, c)] = v[c];
+            }
+        }
+        let known = gather(&targets, self.second.known());
+        let x = self.second.solve(b.as_ref(), known.as_ref())?;
+        Ok(from_mat(x.as_ref()))
+    }
+}
+
+impl EditMethod for ImplicitEditor {
+    type Options = ImplicitOptions;
+
+    fn factor(problem: &EditProblem, options: &ImplicitOptions) -> Result<Self, EditError> {
+        check_singular(problem)?;
+        let n = problem.len();
+        let n_roi = problem.n_roi;
+        let stencil: Vec<Vec<usize>> = (0..n_roi)
+            .map(|i| {
+                let mut s = vec![i];
+                s.extend_from_slice(&problem.neighbors[i]);
+                s
+            })
+            .collect();
+        // Degenerate vertices: sequential displacement along the normal.
+        let normals = local_normals(problem);
+        let mut x = problem.rest.clone();
+        let mut n_degenerate = 0;
+        for i in 0..n_roi {
+            let (cond, _) = fit(&x, &stencil[i]);
+            if cond > DEGENERATE_COND {
+                let nb = &problem.neighbors[i];
+                let mean =
+                    nb.iter().map(|&j| x[i].distance(x[j])).sum::<f64>() / nb.len().max(1) as f64;
+                x[i] += normals[i] * (options.s_disp * mean);
+                n_degenerate += 1;
+            }
+        }
+        let mut q = Vec::with_capacity(n_roi);
+        let mut n_still_degenerate = 0;
+        for s in &stencil {
+            let (cond, qi) = fit(&x, s);
+            if cond > DEGENERATE_COND {
+                n_still_degenerate += 1;
+            }
+            // A vertex that is still rank-deficient (e.g. collinear ring) gets Qᵢ = 0:
+            // its gradient drops out of the coherence term.
+            q.push(qi.unwrap_or_else(|| vec![[0.0; 3]; s.len()]));
+        }
+        // Clamped cotangent weights of the displaced mesh, normalised per row.
+        let displaced_problem = EditProblem {
+            rest: x.clone(),
+            ..problem.clone()
+        };
+        let w = cotan_weights(&displaced_problem, true);
+        let mut wsum = vec![0.0; n];
+        for &(i, _, v) in &w {
+            wsum[i] += v;
+        }
+        let mut lap: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n_roi];
+        for &(i, j, v) in &w {
+            if i < n_roi && wsum[i] > 0.0 {
+                lap[i].push((j, v / wsum[i]));
+            }
+        }
+        let delta: Vec<Vec3> = (0..n_roi)
+            .map(|i| {
+                lap[i]
+                    .iter()
+                    .fold(Vec3::ZERO, |a, &(j, v)| a + (x[j] - x[i]) * v)
+            })
+            .collect();
+        let fixed_grad = |i: usize| match problem.role[i] {
+            Role::Handle(h) => problem.handles[h].fix_gradient,
+            _ => false,
+        };
+        // E_L rows.
+        let mut al = RowBuilder::new(n);
+        let mut qm = RowBuilder::new(n);
+        let mut entries = Vec::new();
+        for i in 0..n_roi {
+            entries.clear();
+            for &(j, v) in &lap[i] {
+                entries.push((j, v));
+                entries.push((i, -v));
+            }
+            if !fixed_grad(i) {
+                for (m, &s) in stencil[i].iter().enumerate() {
+                    let qd =
+                        q[i][m][0] * delta[i].x + q[i][m][1] * delta[i].y + q[i][m][2] * delta[i].z;
+                    entries.push((s, -qd));
+                }
+            }
+            al.push(&entries)?;
+            for c in 0..3 {
+                entries.clear();
+                if !fixed_grad(i) {
+                    for (&s, qm_row) in stencil[i].iter().zip(&q[i]) {
+                        entries.push((s, qm_row[c]));
+                    }
+                }
+                qm.push(&entries)?;
+            }
+        }
+        // Coherence metric: graph Laplacian of the 2-ring pairs, times I₃.
+        let mut mark = vec![usize::MAX; n_roi];
+        let mut pairs = Vec::new();
+        for i in 0..n_roi {
+            mark[i] = i;
+            for &j in &problem.neighbors[i] {
+                for &k in std::iter::once(&j).chain(problem.neighbors[j].iter()) {
+                    if k < n_roi && mark[k] != i {
+                        mark[k] = i;
+                        if k > i {
+                            pairs.push((i, k));
+                        }
+                    }
+                }
+            }
+        }
+        let mut lt = Vec::with_capacity(pairs.len() * 12);
+        for &(i, j) in &pairs {
+            for c in 0..3 {
+                let (a, b) = (3 * i + c, 3 * j + c);
+                lt.extend([(a, a, 1.0), (b, b, 1.0), (a, b, -1.0), (b, a, -1.0)]);
+            }
+        }
+        let l3 = sparse_from_triplets(3 * n_roi, 3 * n_roi, &lt)?;
+        let ebar = problem.mean_edge_length();
+        let mu = options.coherence_weight * ebar * ebar;
+        let terms = [
+            QuadTerm {
+                a: al.finish()?,
+                metric: None,
+                weight: 1.0,
+            },
+            QuadTerm {
+                a: qm.finish()?,
+                metric: Some(l3),
+                weight: mu,
+            },
+        ];
+        let x0 = Mat::from_fn(n, 3, |i, c| x[i][c]);
+        let first = FactoredQuadratic::new(n, &terms, &problem.constrained(), Some(x0))?;
+        let k = cotan_stiffness(problem)?;
+        let kv = sparse_mul_dense(
+            k.as_ref(),
+            Mat::from_fn(n, 3, |i, c| problem.rest[i][c]).as_ref(),
+        )?;
+        let second = FixedSolver::precompute(
+            k.as_ref(),
+            &problem.constrained(),
+            CholeskyOptions::default(),
+        )?;
+        Ok(Self {
+            first,
+            second,
+            displaced: x,
+            stencil,
+            q,
+            delta,
+            kv,
+            n_degenerate,
+            n_still_degenerate,
+            mu,
+            options: *options,
+            last_first: None,
+        })
+    }
+
+    fn solve(
+        &mut self,
+        problem: &EditProblem,
+        transforms: &[Similarity],
+    ) -> Result<Vec<Vec3>, EditError> {
+        let first = self.solve_drag(problem, transforms)?;
+        if self.options.second_solve {
+            self.solve_release(problem, transforms)
+        } else {
+            Ok(first)
+        }
+    }
+
+    fn factor_len(&self) -> usize {
+        self.first.factor_len()
+    }
+}
+
+impl ImplicitEditor {
+    /// The coherence weight `μ` in absolute units.
+    pub fn coherence_mu(&self) -> f64 {
+        self.mu
+    }
+}

@@ -1,0 +1,139 @@
+//! Operators on an [`EditProblem`]'s local vertices: cotangent stiffness, the uniform graph
+//! Laplacian, per-face hat-function gradients and graph distances. Rows of ROI vertices
+//! equal the rows of the whole mesh's operators (their stencils are complete).
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+use super::problem::EditProblem;
+use crate::geometry::{cot_of_angle_between, triangle_normal, Vec3};
+use crate::solve::{sparse_from_triplets, SolveError, SparseMatrix};
+
+/// Edge cotangent weights `w_ij = ½(cot α + cot β)` summed over the local faces, as
+/// `(i, j, w)` for both orders.
+pub fn cotan_weights(p: &EditProblem, clamp_negative: bool) -> Vec<(usize, usize, f64)> {
+    let x = &p.rest;
+    let mut t = Vec::with_capacity(p.faces.len() * 6);
+    for f in &p.faces {
+        for k in 0..3 {
+            let (a, i, j) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3]);
+            let w = 0.5 * cot_of_angle_between(x[i] - x[a], x[j] - x[a]);
+            t.push((i, j, w));
+            t.push((j, i, w));
+        }
+    }
+    if clamp_negative {
+        let mut sums = std::collections::HashMap::with_capacity(t.len());
+        for &(i, j, w) in &t {
+            *sums.entry((i, j)).or_insert(0.0) += w;
+        }
+        t = sums
+            .into_iter()
+            .map(|((i, j), w)| (i, j, f64::max(w, 0.0)))
+            .collect();
+        t.sort_unstable_by_key(|a| (a.0, a.1));
+    }
+    t
+}
+
+/// Symmetric positive semidefinite `K` with `K_ij = −w_ij`, `K_ii = Σ_j w_ij` from edge
+/// weights given for both orders.
+pub fn stiffness_from_weights(
+    n: usize,
+    weights: &[(usize, usize, f64)],
+) -> Result<SparseMatrix, SolveError> {
+    let mut t = Vec::with_capacity(weights.len() * 2);
+    for &(i, j, w) in weights {
+        t.push((i, j, -w));
+        t.push((i, i, w));
+    }
+    sparse_from_triplets(n, n, &t)
+}
+
+/// The cotangent stiffness `K = −C` over the local vertices.
+pub fn cotan_stiffness(p: &EditProblem) -> Result<SparseMatrix, SolveError> {
+    stiffness_from_weights(p.len(), &cotan_weights(p, false))
+}
+
+/// The uniform graph Laplacian `D − A` over the local vertices.
+pub fn graph_laplacian(p: &EditProblem) -> Result<SparseMatrix, SolveError> {
+    let mut w = Vec::new();
+    for (i, nb) in p.neighbors.iter().enumerate() {
+        for &j in nb {
+            w.push((i, j, 1.0));
+        }
+    }
+    stiffness_from_weights(p.len(), &w)
+}
+
+/// Per local face: area and the area-weighted hat gradients `|T| ∇B_k = ½ n̂ × e_k`
+/// (`None` for a degenerate face).
+pub fn face_gradients(p: &EditProblem, x: &[Vec3]) -> Vec<Option<(f64, [Vec3; 3])>> {
+    p.faces
+        .iter()
+        .map(|&[a, b, c]| {
+            let n = triangle_normal(x[a], x[b], x[c]);
+            let len = n.norm();
+            if !(len > 0.0 && len.is_finite()) {
+                return None;
+            }
+            let nh = n / len;
+            let g = |from: usize, to: usize| nh.cross(x[to] - x[from]) * 0.5;
+            Some((0.5 * len, [g(b, c), g(c, a), g(a, b)]))
+        })
+        .collect()
+}
+
+#[derive(PartialEq)]
+struct Item(f64, usize);
+impl Eq for Item {}
+impl PartialOrd for Item {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Item {
+    fn cmp(&self, o: &Self) -> Ordering {
+        o.0.total_cmp(&self.0)
+    }
+}
+
+/// Shortest edge-path distance over the local graph from `sources` (∞ if unreachable).
+pub fn graph_distance(p: &EditProblem, sources: &[usize]) -> Vec<f64> {
+    let mut d = vec![f64::INFINITY; p.len()];
+    let mut heap = BinaryHeap::new();
+    for &s in sources {
+        d[s] = 0.0;
+        heap.push(Item(0.0, s));
+    }
+    while let Some(Item(dist, i)) = heap.pop() {
+        if dist > d[i] {
+            continue;
+        }
+        for &j in &p.neighbors[i] {
+            let nd = dist + p.rest[i].distance(p.rest[j]);
+            if nd < d[j] {
+                d[j] = nd;
+                heap.push(Item(nd, j));
+            }
+        }
+    }
+    d
+}
+
+/// Positions as an `n × 3` faer matrix.
+pub fn to_mat(x: &[Vec3]) -> faer::Mat<f64> {
+    faer::Mat::from_fn(x.len(), 3, |i, c| x[i][c])
+}
+
+/// Rows of an `n × 3` matrix as positions.
+pub fn from_mat(m: faer::MatRef<'_, f64>) -> Vec<Vec3> {
+    (0..m.nrows())
+        .map(|i| Vec3::new(m[(i, 0)], m[(i, 1)], m[(i, 2)]))
+        .collect()
+}
+
+/// The rows `idx` of positions as a `k × 3` matrix.
+pub fn gather(x: &[Vec3], idx: &[usize]) -> faer::Mat<f64> {
+    faer::Mat::from_fn(idx.len(), 3, |r, c| x[idx[r]][c])
+}

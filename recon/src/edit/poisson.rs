@@ -1,0 +1,207 @@
+//! Poisson gradient-field editing (Yu, Zhou, Xu, Shi, Bao, Guo, Shum 2004, *Mesh Editing
+//! with Poisson-Based Gradient Field Manipulation*, §3).
+//!
+//! Each triangle's coordinate gradients are transformed by a per-face linear map `M_T`
+//! and the mesh is re-stitched by the Poisson equation `K x = Σ_T M_T |T|∇B_T` over the
+//! cotangent stiffness `K`, with hard (Dirichlet) constraints at the ring, anchors and
+//! handles (§3.1–3.2; the right-hand side `b_i = Σ_{T∋i} M_T ½ n̂_T × e_i` is the
+//! closed form of the divergence of the transformed gradients).
+//!
+//! Transform propagation (§3.3): every boundary condition (the fixed set with the identity,
+//! each handle with its rotation `q_h` and scale `σ_h`) is weighted at a free vertex by the
+//! inverse of its distance to that vertex (the paper's "linear" scheme); rotations are
+//! averaged by the sequential slerp of footnote 3 (for one handle: the slerp from the
+//! identity), scales by the weighted geometric mean. A face takes the chordal mean of its
+//! three vertices' quaternions and the geometric mean of their scales. Distances are shortest edge paths
+//! over the ROI (a documented substitute for the paper's fast-marching distance; both are
+//! only used as weights). A single handle rotated by θ therefore rotates a free vertex by
+//! `θ·d₀/(d₀ + d_h)`.
+
+use faer::Mat;
+use nalgebra::{UnitQuaternion, Vector3};
+
+use super::local::{cotan_stiffness, face_gradients, from_mat, gather, graph_distance};
+use super::problem::{EditProblem, Role};
+use super::session::EditMethod;
+use super::similarity::{mat_vec, weighted_average, Mat3, Similarity};
+use super::EditError;
+use crate::geometry::Vec3;
+use crate::solve::{CholeskyOptions, FixedSolver};
+
+/// Options of [`PoissonEditor`].
+#[derive(Debug, Clone, Copy)]
+pub struct PoissonOptions {
+    /// Propagate handle rotations and scales to the faces (false: "naive Poisson", which
+    /// keeps the rest gradients and only moves the constraints).
+    pub propagate: bool,
+}
+
+impl Default for PoissonOptions {
+    fn default() -> Self {
+        Self { propagate: true }
+    }
+}
+
+/// Factored Poisson editing of one ROI.
+#[derive(Debug, Clone)]
+pub struct PoissonEditor {
+    solver: FixedSolver,
+    /// Area-weighted hat gradients of the rest faces.
+    grads: Vec<Option<(f64, [Vec3; 3])>>,
+    /// Per local vertex: normalised weights of [fixed, handle 0, handle 1, ...].
+    weights: Vec<Vec<f64>>,
+    options: PoissonOptions,
+}
+
+impl PoissonEditor {
+    /// Solves with an explicit linear map per local face and explicit positions of every
+    /// constrained vertex (`targets` holds one position per local vertex; free entries are
+    /// ignored).
+    pub fn solve_with_face_maps(
+        &self,
+        problem: &EditProblem,
+        face_maps: &[Mat3],
+        targets: &[Vec3],
+    ) -> Result<Vec<Vec3>, EditError> {
+        if face_maps.len() != problem.faces.len() || targets.len() != problem.len() {
+            return Err(EditError::Spec("face map or target count mismatch".into()));
+        }
+        let mut b = Mat::<f64>::zeros(problem.len(), 3);
+        for ((f, g), m) in problem.faces.iter().zip(&self.grads).zip(face_maps) {
+            let Some((_, g)) = g else { continue };
+            for k in 0..3 {
+                let v = mat_vec(m, g[k]);
+                for c in 0..3 {
+                    b[(f[k], c)] += v[c];
+                }
+            }
+        }
+        let known = gather(targets, self.solver.known());
+        let x = self.solver.solve(b.as_ref(), known.as_ref())?;
+        Ok(from_mat(x.as_ref()))
+    }
+
+    /// The per-vertex rotation and log-scale propagated from the handle transforms.
+    pub fn vertex_transforms(
+        &self,
+        problem: &EditProblem,
+        transforms: &[Similarity],
+    ) -> Vec<(UnitQuaternion<f64>, f64)> {
+        // One handle: slerp(1, q_h; λ) is the rotation about q_h's axis by λ·θ_h.
+        let single = (transforms.len() == 1).then(|| {
+            let (axis, angle) = transforms[0]
+                .rotation
+                .axis_angle()
+                .map_or((Vector3::z_axis(), 0.0), |(a, t)| (a, t));
+            (axis, angle, transforms[0].scale.ln())
+        });
+        (0..problem.len())
+            .map(|l| match problem.role[l] {
+                Role::Handle(h) => (transforms[h].rotation, transforms[h].scale.ln()),
+                Role::Ring | Role::Anchor => (UnitQuaternion::identity(), 0.0),
+                Role::Free if !self.options.propagate => (UnitQuaternion::identity(), 0.0),
+                Role::Free => {
+                    let w = &self.weights[l];
+                    if let Some((axis, angle, log_s)) = single {
+                        return (
+                            UnitQuaternion::from_axis_angle(&axis, w[1] * angle),
+                            w[1] * log_s,
+                        );
+                    }
+                    let mut items = Vec::with_capacity(w.len());
+                    items.push((UnitQuaternion::identity(), w[0]));
+                    let mut log_s = 0.0;
+                    for (h, t) in transforms.iter().enumerate() {
+                        items.push((t.rotation, w[h + 1]));
+                        log_s += w[h + 1] * t.scale.ln();
+                    }
+                    (weighted_average(&items), log_s)
+                }
+            })
+            .collect()
+    }
+
+    /// Per-face maps `σ_T R(q_T)` from per-vertex rotations and log-scales: `q_T` is the
+    /// normalised, hemisphere-aligned sum of the three vertex quaternions (the chordal
+    /// mean, equal to the sequential slerp average to second order in their spread and
+    /// exact when they agree), `σ_T` their geometric mean.
+    pub fn face_maps(problem: &EditProblem, vertex: &[(UnitQuaternion<f64>, f64)]) -> Vec<Mat3> {
+        problem
+            .faces
+            .iter()
+            .map(|f| {
+                let q0 = vertex[f[0]].0.into_inner();
+                let mut q = q0;
+                for &v in &f[1..] {
+                    let qv = vertex[v].0.into_inner();
+                    q += if q0.dot(&qv) < 0.0 { -qv } else { qv };
+                }
+                let r = UnitQuaternion::new_normalize(q)
+                    .to_rotation_matrix()
+                    .into_inner();
+                let ls = vertex[f[0]].1 + vertex[f[1]].1 + vertex[f[2]].1;
+                if ls == 0.0 {
+                    r
+                } else {
+                    r * (ls / 3.0).exp()
+                }
+            })
+            .collect()
+    }
+}
+
+impl EditMethod for PoissonEditor {
+    type Options = PoissonOptions;
+
+    fn factor(problem: &EditProblem, options: &PoissonOptions) -> Result<Self, EditError> {
+        let k = cotan_stiffness(problem)?;
+        let solver = FixedSolver::precompute(
+            k.as_ref(),
+            &problem.constrained(),
+            CholeskyOptions::default(),
+        )?;
+        let grads = face_gradients(problem, &problem.rest);
+        let fixed: Vec<usize> = (0..problem.len())
+            .filter(|&l| matches!(problem.role[l], Role::Ring | Role::Anchor))
+            .collect();
+        let mut dists = vec![graph_distance(problem, &fixed)];
+        for h in &problem.handles {
+            dists.push(graph_distance(problem, &h.vertices));
+        }
+        let weights = (0..problem.len())
+            .map(|l| {
+                let raw: Vec<f64> = dists
+                    .iter()
+                    .map(|d| if d[l] > 0.0 { 1.0 / d[l] } else { 0.0 })
+                    .collect();
+                let s: f64 = raw.iter().sum();
+                if s > 0.0 && s.is_finite() {
+                    raw.iter().map(|w| w / s).collect()
+                } else {
+                    vec![0.0; raw.len()]
+                }
+            })
+            .collect();
+        Ok(Self {
+            solver,
+            grads,
+            weights,
+            options: *options,
+        })
+    }
+
+    fn solve(
+        &mut self,
+        problem: &EditProblem,
+        transforms: &[Similarity],
+    ) -> Result<Vec<Vec3>, EditError> {
+        let targets = problem.targets(transforms)?;
+        let vt = self.vertex_transforms(problem, transforms);
+        let maps = Self::face_maps(problem, &vt);
+        self.solve_with_face_maps(problem, &maps, &targets)
+    }
+
+    fn factor_len(&self) -> usize {
+        0
+    }
+}

@@ -1,0 +1,446 @@
+//! The linear core every editing method shares: a quadratic energy
+//! `Σₜ wₜ (Aₜx − bₜ)ᵀ Wₜ (Aₜx − bₜ)` with some entries of `x` fixed, factored once and
+//! solved for many right-hand sides (libigl's precompute/solve split, as
+//! [`crate::solve::FixedSolver`] does for an assembled matrix).
+//!
+//! The fixed columns of every `Aₜ` are split off: the factored matrix is
+//! `Σ wₜ A_{t,u}ᵀ Wₜ A_{t,u}`; a solve forms `Σ wₜ A_{t,u}ᵀ Wₜ (bₜ − A_{t,k} x_k)` and
+//! back-substitutes. Changing `bₜ` or the fixed values costs no factorisation;
+//! [`FactoredQuadratic::refactor`] redoes only the numeric factorisation for new values
+//! of the same pattern (LSE's re-fitting iterations).
+
+use faer::sparse::linalg::matmul::sparse_sparse_matmul;
+use faer::sparse::ops::add;
+use faer::sparse::{SparseRowMat, SymbolicSparseColMat, SymbolicSparseRowMat};
+use faer::{Mat, MatRef, Par};
+
+use crate::solve::{
+    sparse_from_triplets, sparse_mul_dense, CholeskyOptions, CholeskySolver, SolveError,
+    SparseMatrix,
+};
+
+/// One term `w (A x − b)ᵀ W (A x − b)` (`W = I` when `metric` is `None`).
+#[derive(Debug, Clone)]
+pub struct QuadTerm {
+    /// `m × n` operator.
+    pub a: SparseMatrix,
+    /// Optional symmetric positive semidefinite `m × m` metric.
+    pub metric: Option<SparseMatrix>,
+    /// Weight `w ≥ 0`.
+    pub weight: f64,
+}
+
+#[derive(Debug, Clone)]
+struct TermParts {
+    /// `w A_uᵀ W` (`n_u × m`).
+    at_w: SparseMatrix,
+    /// `A_k` (`m × n_k`).
+    a_k: SparseMatrix,
+    rows: usize,
+    /// `w A_uᵀ W A x₀` of the reference solution (`n_u × c`), if one was given.
+    rhs_x0: Option<Mat<f64>>,
+}
+
+/// A factored quadratic energy with fixed entries.
+#[derive(Debug, Clone)]
+pub struct FactoredQuadratic {
+    n: usize,
+    unknown: Vec<usize>,
+    known: Vec<usize>,
+    slot: Vec<usize>,
+    parts: Vec<TermParts>,
+    chol: CholeskySolver,
+    x0: Option<Mat<f64>>,
+}
+
+fn fe(_: faer::sparse::FaerError) -> SolveError {
+    SolveError::OutOfMemory
+}
+
+/// `Aᵀ` as a column-major matrix.
+pub fn transpose(a: &SparseMatrix) -> Result<SparseMatrix, SolveError> {
+    a.as_ref().transpose().to_col_major().map_err(fe)
+}
+
+/// `A B`, with sorted columns.
+pub fn matmul(a: &SparseMatrix, b: &SparseMatrix) -> Result<SparseMatrix, SolveError> {
+    if a.ncols() != b.nrows() {
+        return Err(SolveError::Dimension(format!(
+            "{}x{} times {}x{}",
+            a.nrows(),
+            a.ncols(),
+            b.nrows(),
+            b.ncols()
+        )));
+    }
+    let p = sparse_sparse_matmul(a.as_ref(), b.as_ref(), 1.0, Par::Seq).map_err(fe)?;
+    sort_columns(p)
+}
+
+/// The same matrix with the row indices of every column in ascending order (duplicates
+/// kept; none arise from faer's products).
+fn sort_columns(m: SparseMatrix) -> Result<SparseMatrix, SolveError> {
+    let (nrows, ncols) = (m.nrows(), m.ncols());
+    let sorted = (0..ncols).all(|j| m.as_ref().row_idx_of_col_raw(j).is_sorted());
+    if sorted && m.as_ref().col_nnz().is_none() {
+        return Ok(m);
+    }
+    let mut col_ptr = Vec::with_capacity(ncols + 1);
+    let mut row_idx = Vec::with_capacity(m.compute_nnz());
+    let mut vals = Vec::with_capacity(m.compute_nnz());
+    col_ptr.push(0);
+    let mut buf: Vec<(usize, f64)> = Vec::new();
+    for j in 0..ncols {
+        buf.clear();
+        buf.extend(
+            m.as_ref()
+                .row_idx_of_col_raw(j)
+                .iter()
+                .copied()
+                .zip(m.as_ref().val_of_col(j).iter().copied()),
+        );
+        buf.sort_unstable_by_key(|e| e.0);
+        for &(i, v) in &buf {
+            row_idx.push(i);
+            vals.push(v);
+        }
+        col_ptr.push(row_idx.len());
+    }
+    Ok(SparseMatrix::new(
+        SymbolicSparseColMat::new_checked(nrows, ncols, col_ptr, None, row_idx),
+        vals,
+    ))
+}
+
+/// `a` scaled by `s`.
+fn scaled(mut a: SparseMatrix, s: f64) -> SparseMatrix {
+    for v in a.parts_mut().1 {
+        *v *= s;
+    }
+    a
+}
+
+/// Builds a sparse matrix row by row (entries of a row in any order, duplicates summed),
+/// without a triplet list.
+#[derive(Debug, Clone)]
+pub struct RowBuilder {
+    ncols: usize,
+    row_ptr: Vec<usize>,
+    col_idx: Vec<usize>,
+    vals: Vec<f64>,
+    buf: Vec<(usize, f64)>,
+}
+
+impl RowBuilder {
+    /// An empty matrix with `ncols` columns.
+    pub fn new(ncols: usize) -> Self {
+        Self {
+            ncols,
+            row_ptr: vec![0],
+            col_idx: Vec::new(),
+            vals: Vec::new(),
+            buf: Vec::new(),
+        }
+    }
+
+    /// Number of rows pushed.
+    pub fn nrows(&self) -> usize {
+        self.row_ptr.len() - 1
+    }
+
+    /// Appends a row; fails on a column out of range.
+    pub fn push(&mut self, entries: &[(usize, f64)]) -> Result<(), SolveError> {
+        self.buf.clear();
+        self.buf.extend_from_slice(entries);
+        self.buf.sort_unstable_by_key(|e| e.0);
+        let mut last = usize::MAX;
+        for &(j, v) in &self.buf {
+            if j >= self.ncols {
+                return Err(SolveError::IndexOutOfRange {
+                    index: j,
+                    size: self.ncols,
+                });
+            }
+            if j == last {
+                if let Some(x) = self.vals.last_mut() {
+                    *x += v;
+                }
+            } else {
+                self.col_idx.push(j);
+                self.vals.push(v);
+                last = j;
+            }
+        }
+        self.row_ptr.push(self.col_idx.len());
+        Ok(())
+    }
+
+    /// The matrix in column-major storage.
+    pub fn finish(self) -> Result<SparseMatrix, SolveError> {
+        let nrows = self.nrows();
+        let rows = SparseRowMat::new(
+            SymbolicSparseRowMat::new_checked(nrows, self.ncols, self.row_ptr, None, self.col_idx),
+            self.vals,
+        );
+        rows.to_col_major().map_err(fe)
+    }
+}
+
+/// Columns of `a` split by `slot` (unknown slot < n, known slot − n otherwise).
+fn split_columns(
+    a: &SparseMatrix,
+    slot: &[usize],
+    nu: usize,
+    nk: usize,
+) -> Result<(SparseMatrix, SparseMatrix), SolveError> {
+    let n = slot.len();
+    if a.ncols() != n {
+        return Err(SolveError::Dimension(format!(
+            "term has {} columns, expected {n}",
+            a.ncols()
+        )));
+    }
+    let mut order_u = vec![usize::MAX; nu];
+    let mut order_k = vec![usize::MAX; nk];
+    for (j, &s) in slot.iter().enumerate() {
+        if s < n {
+            order_u[s] = j;
+        } else {
+            order_k[s - n] = j;
+        }
+    }
+    let pick = |order: &[usize]| {
+        let mut col_ptr = Vec::with_capacity(order.len() + 1);
+        let mut row_idx = Vec::new();
+        let mut vals = Vec::new();
+        col_ptr.push(0);
+        for &j in order {
+            row_idx.extend_from_slice(a.as_ref().row_idx_of_col_raw(j));
+            vals.extend_from_slice(a.as_ref().val_of_col(j));
+            col_ptr.push(row_idx.len());
+        }
+        SparseMatrix::new(
+            SymbolicSparseColMat::new_unsorted_checked(
+                a.nrows(),
+                order.len(),
+                col_ptr,
+                None,
+                row_idx,
+            ),
+            vals,
+        )
+    };
+    Ok((pick(&order_u), pick(&order_k)))
+}
+
+impl FactoredQuadratic {
+    /// Assembles and factors the energy over `n` unknowns with the entries `known` fixed.
+    ///
+    /// With a reference solution `x0` (`n × c`, e.g. the rest shape) solves are done for
+    /// the correction `x − x₀`, so an edit that leaves the rest shape optimal returns it to
+    /// round-off instead of to the conditioning of the normal equations.
+    pub fn new(
+        n: usize,
+        terms: &[QuadTerm],
+        known: &[usize],
+        x0: Option<Mat<f64>>,
+    ) -> Result<Self, SolveError> {
+        let mut slot = vec![usize::MAX; n];
+        let mut kept = Vec::new();
+        for &k in known {
+            if k >= n {
+                return Err(SolveError::IndexOutOfRange { index: k, size: n });
+            }
+            if slot[k] == usize::MAX {
+                slot[k] = n + kept.len();
+                kept.push(k);
+            }
+        }
+        let mut unknown = Vec::with_capacity(n - kept.len());
+        for (i, s) in slot.iter_mut().enumerate() {
+            if *s == usize::MAX {
+                *s = unknown.len();
+                unknown.push(i);
+            }
+        }
+        if x0.as_ref().is_some_and(|x| x.nrows() != n) {
+            return Err(SolveError::Dimension("reference has the wrong size".into()));
+        }
+        let (parts, gram) = Self::assemble(&slot, unknown.len(), kept.len(), terms, x0.as_ref())?;
+        let chol = CholeskySolver::new(gram.as_ref(), CholeskyOptions::default())?;
+        Ok(Self {
+            n,
+            unknown,
+            known: kept,
+            slot,
+            parts,
+            chol,
+            x0,
+        })
+    }
+
+    fn assemble(
+        slot: &[usize],
+        nu: usize,
+        nk: usize,
+        terms: &[QuadTerm],
+        x0: Option<&Mat<f64>>,
+    ) -> Result<(Vec<TermParts>, SparseMatrix), SolveError> {
+        let mut parts = Vec::with_capacity(terms.len());
+        let mut gram: Option<SparseMatrix> = None;
+        for t in terms {
+            let (a_u, a_k) = split_columns(&t.a, slot, nu, nk)?;
+            let at = transpose(&a_u)?;
+            let at_w = match &t.metric {
+                Some(w) => matmul(&at, w)?,
+                None => at,
+            };
+            let at_w = if t.weight == 1.0 {
+                at_w
+            } else {
+                scaled(at_w, t.weight)
+            };
+            let g = matmul(&at_w, &a_u)?;
+            gram = Some(match gram {
+                None => g,
+                Some(acc) => sort_columns(add(acc.as_ref(), g.as_ref()).map_err(fe)?)?,
+            });
+            let rhs_x0 = match x0 {
+                Some(x) => {
+                    let ax = sparse_mul_dense(t.a.as_ref(), x.as_ref())?;
+                    Some(sparse_mul_dense(at_w.as_ref(), ax.as_ref())?)
+                }
+                None => None,
+            };
+            parts.push(TermParts {
+                at_w,
+                a_k,
+                rows: t.a.nrows(),
+                rhs_x0,
+            });
+        }
+        let gram = match gram {
+            Some(g) => g,
+            None => sparse_from_triplets(nu, nu, &[])?,
+        };
+        Ok((parts, gram))
+    }
+
+    /// New values for terms of the same shapes and patterns: numeric refactorisation only.
+    pub fn refactor(&mut self, terms: &[QuadTerm]) -> Result<(), SolveError> {
+        let (parts, gram) = Self::assemble(
+            &self.slot,
+            self.unknown.len(),
+            self.known.len(),
+            terms,
+            self.x0.as_ref(),
+        )?;
+        self.chol.factorize(gram.as_ref())?;
+        self.parts = parts;
+        Ok(())
+    }
+
+    /// Number of unknowns that are solved for.
+    pub fn n_unknown(&self) -> usize {
+        self.unknown.len()
+    }
+
+    /// Stored entries of the Cholesky factor.
+    pub fn factor_len(&self) -> usize {
+        self.chol.factor_len()
+    }
+
+    /// The fixed indices, in the order `known_values` rows are read.
+    pub fn known(&self) -> &[usize] {
+        &self.known
+    }
+
+    /// Solves with one right-hand side `bₜ` per term (`mₜ × c`; `None` means zero) and the
+    /// fixed values (`n_k × c`, rows in the order of [`Self::known`]); returns all `n × c`.
+    pub fn solve(
+        &self,
+        b: &[Option<MatRef<'_, f64>>],
+        known_values: MatRef<'_, f64>,
+    ) -> Result<Mat<f64>, SolveError> {
+        let c = known_values.ncols();
+        if b.len() != self.parts.len() || known_values.nrows() != self.known.len() {
+            return Err(SolveError::Dimension(
+                "right-hand sides or fixed values have the wrong shape".into(),
+            ));
+        }
+        if self.x0.as_ref().is_some_and(|x| x.ncols() != c) {
+            return Err(SolveError::Dimension(
+                "reference has the wrong width".into(),
+            ));
+        }
+        // Fixed values relative to the reference.
+        let dk = Mat::from_fn(self.known.len(), c, |r, col| {
+            known_values[(r, col)] - self.x0.as_ref().map_or(0.0, |x| x[(self.known[r], col)])
+        });
+        // rhs = Σ w A_uᵀ W (b − A x₀ − A_k Δx_k); the residual b − A_k Δx_k is sparse in
+        // practice (only moved handles and gradient rows), so only its nonzero rows are
+        // multiplied.
+        let mut rhs = Mat::<f64>::zeros(self.unknown.len(), c);
+        let dk_nonzero: Vec<usize> = (0..self.known.len())
+            .filter(|&r| (0..c).any(|col| dk[(r, col)] != 0.0))
+            .collect();
+        for (p, bt) in self.parts.iter().zip(b) {
+            if let Some(r0) = &p.rhs_x0 {
+                rhs -= r0;
+            }
+            let mut r = vec![0.0; p.rows * c];
+            let mut touched = vec![false; p.rows];
+            let mut list = Vec::new();
+            let ak = p.a_k.as_ref();
+            for &kc in &dk_nonzero {
+                for (&i, &v) in ak.row_idx_of_col_raw(kc).iter().zip(ak.val_of_col(kc)) {
+                    for col in 0..c {
+                        r[i * c + col] -= v * dk[(kc, col)];
+                    }
+                    if !touched[i] {
+                        touched[i] = true;
+                        list.push(i);
+                    }
+                }
+            }
+            if let Some(bt) = bt {
+                if bt.nrows() != p.rows || bt.ncols() != c {
+                    return Err(SolveError::Dimension("right-hand side shape".into()));
+                }
+                for i in 0..p.rows {
+                    for col in 0..c {
+                        let v = bt[(i, col)];
+                        if v != 0.0 {
+                            r[i * c + col] += v;
+                            if !touched[i] {
+                                touched[i] = true;
+                                list.push(i);
+                            }
+                        }
+                    }
+                }
+            }
+            let at = p.at_w.as_ref();
+            for &i in &list {
+                for (&u, &v) in at.row_idx_of_col_raw(i).iter().zip(at.val_of_col(i)) {
+                    for col in 0..c {
+                        rhs[(u, col)] += v * r[i * c + col];
+                    }
+                }
+            }
+        }
+        self.chol.solve_in_place(rhs.as_mut())?;
+        let mut x = Mat::zeros(self.n, c);
+        for (r, &i) in self.unknown.iter().enumerate() {
+            for col in 0..c {
+                x[(i, col)] = rhs[(r, col)] + self.x0.as_ref().map_or(0.0, |x| x[(i, col)]);
+            }
+        }
+        for (r, &i) in self.known.iter().enumerate() {
+            for col in 0..c {
+                x[(i, col)] = known_values[(r, col)];
+            }
+        }
+        Ok(x)
+    }
+}
