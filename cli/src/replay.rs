@@ -11,6 +11,7 @@ use fires_host::replay::bar::bar_experiment;
 use fires_host::replay::plot::tip_error_png;
 use fires_host::replay::report::{replay_report, tip_errors};
 use fires_host::replay::{replay, ReplayConfig, WorldSource};
+use fires_host::session::DisplayFilter;
 use fires_host::track::fusion::FusionKind;
 use fires_record::report::TipErrorPlot;
 use fires_record::{RecordingReader, Report};
@@ -31,6 +32,28 @@ pub struct ReplayArgs {
     /// World reference (gravity and magnetic field in the camera frame).
     #[arg(long, value_enum, default_value_t = World::Estimate)]
     pub world: World,
+    /// Filter of the live display tip (`display_*` in track.csv).
+    #[arg(long, value_enum, default_value_t = Display::OneEuro)]
+    pub display: Display,
+}
+
+/// `--display`: the filter behind the live display of the tip.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Display {
+    /// The One Euro filter (Casiez et al., CHI 2012) tuned for a pen (the default): a few ms of lag.
+    OneEuro,
+    /// The thesis's causal Gaussian (300 taps, 3 passes): steady, but trails the pen by about 0.5 s.
+    Thesis,
+}
+
+impl Display {
+    /// The session's display filter for this choice (default parameters).
+    pub fn filter(self) -> DisplayFilter {
+        match self {
+            Display::OneEuro => DisplayFilter::OneEuro(Default::default()),
+            Display::Thesis => DisplayFilter::Thesis(Default::default()),
+        }
+    }
 }
 
 /// `--fusion`: which filter fuses the IMU with the vision axis.
@@ -86,6 +109,7 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<Report> {
     let mut config = ReplayConfig::default();
     config.tracker.fusion = args.fusion.kind();
     config.world = args.world.source();
+    config.strokes.display = args.display.filter();
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     if reader.meta().pen.led_positions_m.len() == 2 {
