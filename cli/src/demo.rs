@@ -45,6 +45,9 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         fusion: Fusion::Orientation,
         world: World::Estimate,
         display: Display::OneEuro,
+        min_cutoff: None,
+        beta: None,
+        d_cutoff: None,
     })?;
     eprintln!(
         "tracked; strokes, track and report in {}",

@@ -105,6 +105,8 @@ pub struct DisplayReport {
     pub jitter_at_rest_mm: Option<f64>,
     /// Display samples inside those rest windows.
     pub rest_samples: usize,
+    /// The same jitter of the tracker's tip before the display filter, millimetres.
+    pub raw_jitter_at_rest_mm: Option<f64>,
 }
 
 /// The tracked strokes against one true stroke.

@@ -172,10 +172,12 @@ pub fn jitter_at_rest(
     (n > 0).then(|| ((sum / n as f64).sqrt(), n))
 }
 
-/// The `display` block: the filter's name and, with truth, its lag and jitter at rest.
+/// The `display` block: the filter's name and, with truth, its lag and jitter at rest, and the jitter of the
+/// unfiltered tip `raw` in the same (truth) rest windows.
 pub fn display_report(
     filter: &str,
     display: &[(u64, [f64; 3])],
+    raw: &[(u64, [f64; 3])],
     truth: Option<&TipTruth>,
     opt: &DisplayOptions,
 ) -> DisplayReport {
@@ -196,6 +198,7 @@ pub fn display_report(
         r.jitter_at_rest_mm = Some(j * 1e3);
         r.rest_samples = n;
     }
+    r.raw_jitter_at_rest_mm = jitter_at_rest(raw, truth, 0, opt).map(|j| j.0 * 1e3);
     r
 }
 

@@ -9,6 +9,7 @@
 
 pub mod bar;
 pub mod display;
+pub mod floor;
 pub mod imu_stream;
 pub mod plot;
 pub mod plot_text;

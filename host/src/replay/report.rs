@@ -244,9 +244,15 @@ pub fn replay_report(
         .zip(&out.display_tips)
         .filter_map(|(s, d)| Some((s.t_ns, (*d)?)))
         .collect();
+    let raw: Vec<(u64, [f64; 3])> = out
+        .samples
+        .iter()
+        .filter_map(|s| Some((s.t_ns, s.tip?)))
+        .collect();
     report.display = Some(display_report(
         out.display_filter,
         &display,
+        &raw,
         tip_truth.as_ref(),
         &DisplayOptions::default(),
     ));
