@@ -205,7 +205,7 @@ mod tests {
     fn identical_offset_and_half_missing_give_exact_figures() {
         let opt = StrokeCompareOptions::default();
         let truth = arc(0.0);
-        let same = compare_polylines(0, vec![0], &truth, &[truth.clone()], &opt);
+        let same = compare_polylines(0, vec![0], &truth, std::slice::from_ref(&truth), &opt);
         assert_eq!(same.rms_mm, Some(0.0));
         assert_eq!(same.max_mm, Some(0.0));
         assert_eq!(same.coverage_3mm, Some(1.0));
