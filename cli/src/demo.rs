@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use crate::replay::{replay_to_dir, Fusion, ReplayArgs, World};
+use crate::replay::{replay_to_dir, Display, Fusion, ReplayArgs, World};
 use crate::sim::{simulate, SessionArgs, SimArgs};
 
 /// Arguments of `fires demo`.
@@ -44,6 +44,10 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         out: args.out.join("replay"),
         fusion: Fusion::Orientation,
         world: World::Estimate,
+        display: Display::OneEuro,
+        min_cutoff: None,
+        beta: None,
+        d_cutoff: None,
     })?;
     eprintln!(
         "tracked; strokes, track and report in {}",

@@ -8,9 +8,11 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use fires_host::replay::bar::bar_experiment;
+use fires_host::replay::floor::floor_figures;
 use fires_host::replay::plot::tip_error_png;
 use fires_host::replay::report::{replay_report, tip_errors};
 use fires_host::replay::{replay, ReplayConfig, WorldSource};
+use fires_host::session::DisplayFilter;
 use fires_host::track::fusion::FusionKind;
 use fires_record::report::TipErrorPlot;
 use fires_record::{RecordingReader, Report};
@@ -31,6 +33,37 @@ pub struct ReplayArgs {
     /// World reference (gravity and magnetic field in the camera frame).
     #[arg(long, value_enum, default_value_t = World::Estimate)]
     pub world: World,
+    /// Filter of the live display tip (`display_*` in track.csv).
+    #[arg(long, value_enum, default_value_t = Display::OneEuro)]
+    pub display: Display,
+    /// One Euro display filter: cutoff at rest, Hz (default 1.0).
+    #[arg(long)]
+    pub min_cutoff: Option<f64>,
+    /// One Euro display filter: cutoff increase per m/s of tip speed, Hz·s/m (default 30).
+    #[arg(long)]
+    pub beta: Option<f64>,
+    /// One Euro display filter: cutoff of the speed estimate, Hz (default 2.0).
+    #[arg(long)]
+    pub d_cutoff: Option<f64>,
+}
+
+/// `--display`: the filter behind the live display of the tip.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Display {
+    /// The One Euro filter (Casiez et al., CHI 2012) tuned for a pen (the default): a few ms of lag.
+    OneEuro,
+    /// The thesis's causal Gaussian (300 taps, 3 passes): steady, but trails the pen by about 0.5 s.
+    Thesis,
+}
+
+impl Display {
+    /// The session's display filter for this choice (default parameters).
+    pub fn filter(self) -> DisplayFilter {
+        match self {
+            Display::OneEuro => DisplayFilter::OneEuro(Default::default()),
+            Display::Thesis => DisplayFilter::Thesis(Default::default()),
+        }
+    }
 }
 
 /// `--fusion`: which filter fuses the IMU with the vision axis.
@@ -86,6 +119,12 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<Report> {
     let mut config = ReplayConfig::default();
     config.tracker.fusion = args.fusion.kind();
     config.world = args.world.source();
+    config.strokes.display = args.display.filter();
+    if let DisplayFilter::OneEuro(c) = &mut config.strokes.display {
+        c.min_cutoff_hz = args.min_cutoff.unwrap_or(c.min_cutoff_hz);
+        c.beta = args.beta.unwrap_or(c.beta);
+        c.d_cutoff_hz = args.d_cutoff.unwrap_or(c.d_cutoff_hz);
+    }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     if reader.meta().pen.led_positions_m.len() == 2 {
@@ -109,6 +148,12 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<Report> {
     write_track_csv(&args.out.join("track.csv"), &out.samples, &out.display_tips)?;
     let mut report = replay_report(&reader, &out, args.fusion.name())
         .with_context(|| format!("report of {}", args.recording.display()))?;
+    if let Some((floor, summary)) = floor_figures(&reader, &config, &out.imu.buttons)
+        .with_context(|| format!("stroke floor of {}", args.recording.display()))?
+    {
+        report.strokes_floor = Some(floor);
+        report.strokes_floor_summary = Some(summary);
+    }
     if let Some(truth) = reader.exposure_truth()? {
         let t0 = out.samples.first().map_or(0, |s| s.t_ns);
         let points: Vec<(f64, f64)> = tip_errors(&out, &truth)

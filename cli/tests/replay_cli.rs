@@ -58,6 +58,16 @@ fn replay_writes_a_tip_error_png() {
     let strokes = fires_record::StrokesFile::read(&out.join("strokes.json")).expect("strokes");
     assert_eq!(typed.strokes, strokes.strokes.len());
     assert!(typed.accuracy.is_some() && typed.tip_error_plot.is_some());
+    // The display follows the pen (One Euro by default), and every true stroke has its figures and its floor.
+    let display = typed.display.as_ref().expect("display block");
+    assert_eq!(display.filter, "one-euro");
+    assert!(display.lag_ms.is_some_and(|l| l <= 50.0), "{display:?}");
+    let vs = typed.strokes_vs_truth.as_ref().expect("strokes_vs_truth");
+    assert_eq!(
+        typed.strokes_summary.map(|s| s.true_strokes),
+        Some(vs.len())
+    );
+    assert!(typed.strokes_floor.is_some() && typed.strokes_floor_summary.is_some());
     let _ = std::fs::remove_dir_all(&rec);
     let _ = std::fs::remove_dir_all(&out);
 }

@@ -1,5 +1,6 @@
 //! One tracking session, fed in time order: IMU samples, button changes and camera frames through the
-//! [`Tracker`], the button-delimited strokes (thesis §4.1.3), the real-time Gaussian display smoothing and the
+//! [`Tracker`], the button-delimited strokes (thesis §4.1.3), the real-time display smoothing (the One Euro filter by
+//! default, the thesis's causal Gaussian as an option) and the
 //! end-of-stroke post-processing. Replay feeds it a recording's events sorted by time; live tracking feeds it
 //! the same events through a short reorder buffer ([`crate::live`]), so both produce the same kind of output.
 
@@ -7,17 +8,73 @@ use std::time::Instant;
 
 use crate::link::ButtonChange;
 use crate::stroke::{
-    stroke_record, CausalSmoother, GaussianConfig, StrokeEvent, StrokeRecordConfig, StrokeSegmenter,
+    stroke_record, CausalSmoother, GaussianConfig, OneEuroConfig, OneEuroFilter, StrokeEvent,
+    StrokeRecordConfig, StrokeSegmenter,
 };
 use crate::track::fusion::ImuSample;
 use crate::track::pipeline::{CameraFrame, TrackSample, Tracker};
 use fires_record::Stroke;
 
+/// The filter behind the live display of the tip.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DisplayFilter {
+    /// The One Euro filter (Casiez et al., CHI 2012), tuned for a pen: follows the pen with a few ms of lag.
+    OneEuro(OneEuroConfig),
+    /// The thesis's causal Gaussian (§4.1.3: 300 taps, 3 passes); steady but trails the pen by about 0.5 s.
+    Thesis(GaussianConfig),
+}
+
+impl Default for DisplayFilter {
+    fn default() -> Self {
+        DisplayFilter::OneEuro(OneEuroConfig::default())
+    }
+}
+
+impl DisplayFilter {
+    /// The name used on the command line and in `report.json`: "one-euro" or "thesis".
+    pub fn name(&self) -> &'static str {
+        match self {
+            DisplayFilter::OneEuro(_) => "one-euro",
+            DisplayFilter::Thesis(_) => "thesis",
+        }
+    }
+}
+
+/// A display filter's running state.
+#[derive(Debug, Clone)]
+enum DisplayState {
+    OneEuro(OneEuroFilter),
+    Thesis(CausalSmoother),
+}
+
+impl DisplayState {
+    fn new(filter: &DisplayFilter) -> Self {
+        match filter {
+            DisplayFilter::OneEuro(c) => DisplayState::OneEuro(OneEuroFilter::new(*c)),
+            DisplayFilter::Thesis(c) => DisplayState::Thesis(CausalSmoother::new(c)),
+        }
+    }
+
+    fn reset(&mut self) {
+        match self {
+            DisplayState::OneEuro(f) => f.reset(),
+            DisplayState::Thesis(f) => f.reset(),
+        }
+    }
+
+    fn push(&mut self, t_ns: u64, p: [f64; 3]) -> [f64; 3] {
+        match self {
+            DisplayState::OneEuro(f) => f.push(t_ns, p),
+            DisplayState::Thesis(f) => f.push(p),
+        }
+    }
+}
+
 /// Stroke settings of a session.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StrokeConfig {
-    /// Display smoothing of the tip (thesis: 300 taps, 3 passes).
-    pub smoothing: GaussianConfig,
+    /// Display smoothing of the tip (default: One Euro).
+    pub display: DisplayFilter,
     /// Post-processing and the strokes-file record of a finished stroke.
     pub record: StrokeRecordConfig,
     /// Mask of the button that draws (bit 0 = button 1).
@@ -27,7 +84,7 @@ pub struct StrokeConfig {
 impl Default for StrokeConfig {
     fn default() -> Self {
         StrokeConfig {
-            smoothing: GaussianConfig::default(),
+            display: DisplayFilter::default(),
             record: StrokeRecordConfig::default(),
             draw_button_mask: 0b0001,
         }
@@ -39,7 +96,7 @@ impl Default for StrokeConfig {
 pub struct SessionSample {
     /// The tracker's sample.
     pub track: TrackSample,
-    /// The tip after the real-time Gaussian smoothing (reset at every pen-down), metres.
+    /// The tip after the real-time display filter (reset at every pen-down), metres.
     pub display_tip: Option<[f64; 3]>,
 }
 
@@ -48,7 +105,7 @@ pub struct Session {
     tracker: Tracker,
     config: StrokeConfig,
     segmenter: StrokeSegmenter,
-    smoother: CausalSmoother,
+    smoother: DisplayState,
     drawing: bool,
     /// Pen-down events so far: the next stroke's id.
     pen_downs: u32,
@@ -63,7 +120,7 @@ impl Session {
     pub fn new(tracker: Tracker, config: StrokeConfig) -> Self {
         Session {
             tracker,
-            smoother: CausalSmoother::new(&config.smoothing),
+            smoother: DisplayState::new(&config.display),
             config,
             segmenter: StrokeSegmenter::default(),
             drawing: false,
@@ -134,7 +191,7 @@ impl Session {
 
     fn sample(&mut self, s: TrackSample) -> SessionSample {
         self.segmenter.tip(s.t_ns, s.tip);
-        let display_tip = s.tip.map(|p| self.smoother.push(p));
+        let display_tip = s.tip.map(|p| self.smoother.push(s.t_ns, p));
         SessionSample {
             track: s,
             display_tip,

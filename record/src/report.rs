@@ -74,6 +74,82 @@ pub struct ReplayReport {
     /// The tip-error plot and its scale (with ground truth).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tip_error_plot: Option<TipErrorPlot>,
+    // -- Display and stroke figures (issue 13, items 6 and 7). --
+    /// The live display filter and, with ground truth, its lag and jitter.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub display: Option<DisplayReport>,
+    /// One entry per true stroke: the tracked strokes against it (with ground truth).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strokes_vs_truth: Option<Vec<StrokeVsTruth>>,
+    /// Median and worst of `strokes_vs_truth`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strokes_summary: Option<StrokesSummary>,
+    /// The floor: the same figures for strokes built from the truth-labelled blobs of every frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strokes_floor: Option<Vec<StrokeVsTruth>>,
+    /// Median and worst of `strokes_floor`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strokes_floor_summary: Option<StrokesSummary>,
+}
+
+/// The live display of the tip: its filter and, with ground truth, how well it follows the pen.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct DisplayReport {
+    /// "one-euro" or "thesis".
+    pub filter: String,
+    /// The time shift (0..600 ms, 5 ms steps) that best aligns the display with the true tip, milliseconds.
+    pub lag_ms: Option<f64>,
+    /// RMS distance of the display from the true tip shifted by `lag_ms`, millimetres.
+    pub rms_at_lag_mm: Option<f64>,
+    /// RMS distance of the display from its mean over the windows in which the true tip rests, millimetres.
+    pub jitter_at_rest_mm: Option<f64>,
+    /// Display samples inside those rest windows.
+    pub rest_samples: usize,
+    /// The same jitter of the tracker's tip before the display filter, millimetres.
+    pub raw_jitter_at_rest_mm: Option<f64>,
+}
+
+/// The tracked strokes against one true stroke.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StrokeVsTruth {
+    /// Id of the true stroke (`truth/strokes.json`).
+    pub truth_id: u32,
+    /// Ids of the tracked strokes matched to it by time overlap (empty if it was lost).
+    pub tracked_ids: Vec<u32>,
+    /// RMS distance of the tracked points from the true tip polyline, millimetres (`null` if lost).
+    pub rms_mm: Option<f64>,
+    /// Largest distance of a tracked point from the true tip polyline, millimetres (`null` if lost).
+    pub max_mm: Option<f64>,
+    /// Fraction of the true path's length within 3 mm of the tracked pieces (`null` for a path of no length).
+    pub coverage_3mm: Option<f64>,
+    /// Tracked length over true length (`null` if lost or for a true path of no length).
+    pub length_ratio: Option<f64>,
+}
+
+/// The median and the worst of one stroke figure (`null` when no stroke has it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MedianWorst {
+    /// Median over the strokes that have the figure.
+    pub median: Option<f64>,
+    /// Worst over those strokes (largest distance, smallest coverage, ratio farthest from 1).
+    pub worst: Option<f64>,
+}
+
+/// Summary of a `strokes_vs_truth` list.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StrokesSummary {
+    /// True strokes.
+    pub true_strokes: usize,
+    /// True strokes with at least one tracked stroke.
+    pub kept: usize,
+    /// RMS distance to the true path, millimetres.
+    pub rms_mm: MedianWorst,
+    /// Largest distance to the true path, millimetres.
+    pub max_mm: MedianWorst,
+    /// Fraction of the true path within 3 mm.
+    pub coverage_3mm: MedianWorst,
+    /// Tracked over true length.
+    pub length_ratio: MedianWorst,
 }
 
 /// The decoder's counters and the bytes read: the `link` block, and the last line of `fires decode`.
@@ -115,10 +191,10 @@ pub struct Accuracy {
     pub tip_rmse_mm: f64,
     /// 95th percentile tip error, millimetres.
     pub tip_p95_mm: f64,
-    /// Fraction of tracked frames with the tip within 2 mm.
-    pub frac_within_2mm: f64,
-    /// The same over frames whose tip is at most 1 m from the left camera.
-    pub frac_within_2mm_le_1m: f64,
+    /// Fraction of tracked frames with the tip within 2 mm (`null` over no frame).
+    pub frac_within_2mm: Option<f64>,
+    /// The same over frames whose tip is at most 1 m from the left camera (`null` over no frame).
+    pub frac_within_2mm_le_1m: Option<f64>,
     /// Frames (tracked, with truth) at most 1 m from the left camera.
     pub frames_le_1m: usize,
     /// Accepted LED labels that name the wrong LED.
@@ -236,10 +312,10 @@ pub struct BarFigures {
     pub bar_frames: usize,
     /// Frames measured at most 1 m from the left camera.
     pub bar_frames_le_1m: usize,
-    /// Fraction of those within ±2 mm of the nominal length.
-    pub bar_frac_within_2mm_le_1m: f64,
-    /// Fraction of all measured frames within ±2 mm.
-    pub bar_frac_within_2mm: f64,
+    /// Fraction of those within ±2 mm of the nominal length (`null` over no frame).
+    pub bar_frac_within_2mm_le_1m: Option<f64>,
+    /// Fraction of all measured frames within ±2 mm (`null` over no frame).
+    pub bar_frac_within_2mm: Option<f64>,
     /// RMS length error over frames at most 1 m away, millimetres.
     pub bar_rmse_mm_le_1m: f64,
 }

@@ -79,8 +79,8 @@ fn a_bar_report_reads_back_equal_and_another_version_is_refused() {
         bar_nominal_mm: 81.0,
         bar_frames: 10,
         bar_frames_le_1m: 8,
-        bar_frac_within_2mm_le_1m: 0.875,
-        bar_frac_within_2mm: 0.9,
+        bar_frac_within_2mm_le_1m: Some(0.875),
+        bar_frac_within_2mm: None,
         bar_rmse_mm_le_1m: 1.1,
     };
     let method = BarMethod {

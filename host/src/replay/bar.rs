@@ -228,11 +228,7 @@ pub fn bar_report(
         .filter(|s| true_range(s.index).unwrap_or(s.range_m) <= 1.0)
         .collect();
     let frac = |v: &[&BarSample]| {
-        if v.is_empty() {
-            0.0
-        } else {
-            v.iter().filter(|s| within(s)).count() as f64 / v.len() as f64
-        }
+        (!v.is_empty()).then(|| v.iter().filter(|s| within(s)).count() as f64 / v.len() as f64)
     };
     let all: Vec<&BarSample> = samples.iter().collect();
     let rmse = if near.is_empty() {

@@ -4,14 +4,17 @@
 //!
 //! Stages: link bytes -> [`imu_stream`] (decode, sample times, buttons) -> camera frames (blob lists, or 8-bit
 //! images through [`crate::vision::BlobDetector`] with the tracker's predicted window) -> tracker (stereo,
-//! identification, tip, fusion) -> strokes (button-delimited, Gaussian display smoothing, B-spline
+//! identification, tip, fusion) -> strokes (button-delimited, display filter, B-spline
 //! post-processing) -> [`report`] against ground truth when the recording has it.
 
 pub mod bar;
+pub mod display;
+pub mod floor;
 pub mod imu_stream;
 pub mod plot;
 pub mod plot_text;
 pub mod report;
 pub mod run;
+pub mod strokes_vs_truth;
 
 pub use run::{replay, ReplayConfig, ReplayError, ReplayOutput, WorldSource};

@@ -11,7 +11,9 @@ use std::collections::HashMap;
 pub use fires_record::report::{Accuracy, WorldReport};
 use fires_record::ExposureTruth;
 
+use super::display::{display_report, DisplayOptions, TipTruth};
 use super::run::ReplayOutput;
+use super::strokes_vs_truth::{strokes_summary, strokes_vs_truth, StrokeCompareOptions};
 use crate::track::fusion::WorldReference;
 use crate::track::pipeline::TrackQuality;
 
@@ -141,16 +143,8 @@ pub fn accuracy(out: &ReplayOutput, truth: &[ExposureTruth]) -> Accuracy {
     Accuracy {
         tip_rmse_mm: rmse * 1e3,
         tip_p95_mm: percentile(&errors, 0.95) * 1e3,
-        frac_within_2mm: if n == 0 {
-            0.0
-        } else {
-            within as f64 / n as f64
-        },
-        frac_within_2mm_le_1m: if near.0 == 0 {
-            0.0
-        } else {
-            near.1 as f64 / near.0 as f64
-        },
+        frac_within_2mm: (n > 0).then(|| within as f64 / n as f64),
+        frac_within_2mm_le_1m: (near.0 > 0).then(|| near.1 as f64 / near.0 as f64),
         frames_le_1m: near.0,
         mislabels,
         labels_checked: checked,
@@ -237,7 +231,37 @@ pub fn replay_report(
         accuracy: None,
         realtime_factor: None,
         tip_error_plot: None,
+        display: None,
+        strokes_vs_truth: None,
+        strokes_summary: None,
+        strokes_floor: None,
+        strokes_floor_summary: None,
     };
+    let tip_truth = tip_truth(reader)?;
+    let display: Vec<(u64, [f64; 3])> = out
+        .samples
+        .iter()
+        .zip(&out.display_tips)
+        .filter_map(|(s, d)| Some((s.t_ns, (*d)?)))
+        .collect();
+    let raw: Vec<(u64, [f64; 3])> = out
+        .samples
+        .iter()
+        .filter_map(|s| Some((s.t_ns, s.tip?)))
+        .collect();
+    report.display = Some(display_report(
+        out.display_filter,
+        &display,
+        &raw,
+        tip_truth.as_ref(),
+        &DisplayOptions::default(),
+    ));
+    if let Some(truth_strokes) = reader.strokes()? {
+        let opt = StrokeCompareOptions::default();
+        let vs = strokes_vs_truth(&out.strokes, &truth_strokes, &opt);
+        report.strokes_summary = Some(strokes_summary(&vs));
+        report.strokes_vs_truth = Some(vs);
+    }
     if let Some(truth) = exposure_truth {
         report.accuracy = Some(accuracy(out, &truth));
         let t0 = truth.iter().map(|e| e.exposure_time_ns).min().unwrap_or(0);
@@ -246,6 +270,27 @@ pub fn replay_report(
         report.realtime_factor = Some(duration_s / (out.wall_ns as f64 / 1e9));
     }
     Ok(report)
+}
+
+/// The true tip over time: the IMU truth (one pose per IMU sample), else the left camera's exposure truth.
+pub fn tip_truth(
+    reader: &fires_record::RecordingReader,
+) -> Result<Option<TipTruth>, fires_record::RecordError> {
+    if let Some(imu) = reader.imu_truth()? {
+        if !imu.is_empty() {
+            return Ok(Some(TipTruth::new(
+                imu.iter().map(|s| (s.time_ns, s.pose.tip_m)).collect(),
+            )));
+        }
+    }
+    Ok(reader.exposure_truth()?.map(|e| {
+        TipTruth::new(
+            e.iter()
+                .filter(|e| e.camera == 0)
+                .map(|e| (e.exposure_time_ns, e.pose.tip_m))
+                .collect(),
+        )
+    }))
 }
 
 /// The hard-iron offset found in the session and, with ground truth, its error (microtesla).

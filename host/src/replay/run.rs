@@ -93,12 +93,14 @@ pub struct LabelPixels {
 pub struct ReplayOutput {
     /// One tracker sample per stereo frame pair (and per IMU sample while dead-reckoning).
     pub samples: Vec<TrackSample>,
-    /// For each sample, the tip after the real-time Gaussian display smoothing.
+    /// For each sample, the tip after the real-time display filter.
     pub display_tips: Vec<Option<[f64; 3]>>,
     /// For each sample, the image blobs its labels name (None for IMU-driven samples).
     pub label_pixels: Vec<Option<LabelPixels>>,
     /// Finished strokes.
     pub strokes: Vec<fires_record::Stroke>,
+    /// Name of the display filter behind `display_tips` ("one-euro" or "thesis").
+    pub display_filter: &'static str,
     /// The link as decoded.
     pub imu: ImuStream,
     /// Camera frames read, per camera.
@@ -245,6 +247,7 @@ pub fn replay(
         display_tips,
         label_pixels,
         strokes,
+        display_filter: config.strokes.display.name(),
         imu,
         frames,
         times,

@@ -1,12 +1,14 @@
-//! Stroke processing (thesis §4.1.3): real-time Gaussian smoothing of the tip for
-//! display, stroke segmentation by the pen button, and the end-of-stroke post-processing
+//! Stroke processing (thesis §4.1.3): real-time smoothing of the tip for display (the One Euro filter by
+//! default, the thesis's Gaussian as an option), stroke segmentation by the pen button, and the end-of-stroke post-processing
 //! (distance-threshold sampling, constrained weighted least-squares cubic B-spline, resampling).
 
+pub mod one_euro;
 pub mod postprocess;
 pub mod record;
 pub mod segment;
 pub mod smooth;
 
+pub use one_euro::{OneEuroConfig, OneEuroFilter};
 pub use postprocess::{postprocess, BSpline, PostprocessConfig, StrokeError};
 pub use record::{stroke_record, StrokeRecordConfig};
 pub use segment::{Stroke, StrokeEvent, StrokeSegmenter, TimedPoint};
