@@ -11,6 +11,7 @@ pub mod bar;
 pub mod imu_stream;
 pub mod plot;
 pub mod plot_text;
+pub mod refusals;
 pub mod report;
 pub mod run;
 

@@ -237,7 +237,12 @@ pub fn replay_report(
         accuracy: None,
         realtime_factor: None,
         tip_error_plot: None,
+        vision_refusals: None,
     };
+    report.vision_refusals = Some(super::refusals::vision_refusals(
+        out,
+        exposure_truth.as_deref(),
+    ));
     if let Some(truth) = exposure_truth {
         report.accuracy = Some(accuracy(out, &truth));
         let t0 = truth.iter().map(|e| e.exposure_time_ns).min().unwrap_or(0);

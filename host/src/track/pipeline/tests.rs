@@ -491,8 +491,13 @@ fn a_three_led_pen_is_relabelled_after_an_occlusion() {
     // Relabelled at the first frames (60 frames/s per camera)...
     assert!(fa.is_some_and(|t| t < 5.05), "{fa:?}");
     assert!(a * 10 >= 2 * 180 * 8, "{a} of 360 frames");
-    // ...while without it the pen waits for a frame the geometry settles alone.
-    assert!(fb.is_none_or(|t| t > 5.3), "{fb:?}");
+    // ...while without it the pen waits for a frame the geometry settles alone (the blobs
+    // matched along the pen line between frames are time-aligned, so that comes after a few
+    // frames).
+    assert!(
+        fb.is_none_or(|t| fa.is_some_and(|fa| t > fa + 0.05)),
+        "{fb:?}"
+    );
     assert!(a > b, "{a} vs {b}");
 }
 
