@@ -40,7 +40,9 @@ pub use refusal::Refusal;
 pub use safety::Unsafe;
 
 use super::fusion::{ImuSample, MagOffset, TipDeadReckoner, TipFilter, WorldFit, WorldReference};
-use super::identify::{Identification, Identifier, IdentifyError, IdentifyPrior, RefusedBy};
+use super::identify::{
+    Identification, Identifier, IdentifyError, IdentifyPrior, RefusedBy, Resolution,
+};
 use super::pen::{PenError, LED_COUNT};
 use super::tip::{TipEstimate, TipEstimator};
 use crate::stereo::{CameraId, Correspondences, StereoRig, Triangulator};
@@ -344,11 +346,16 @@ impl Tracker {
         if let Some(world) = self.direction.observe_labelled(t, id, &vision.direction) {
             self.reckoner.set_world(world);
         }
-        // Without a world reference there is no direction prior, and only the four-LED pattern
-        // (cross-ratio, no mirror image) is safe to report. Other labellings are kept for time
+        // Without a world reference there is no direction prior. Safe to report are the
+        // four-LED pattern (cross-ratio, no mirror image) and three LEDs that the geometry alone
+        // labelled (their spacing is not mirror-symmetric, a scaled twin needed continuity, and
+        // no rival fits). Other labellings (two LEDs, or resolved by a prior) are kept for time
         // alignment and continuity (a mirrored chain still tracks each blob consistently) but
         // give no tip.
-        if self.direction.world().is_none() && id.count() < LED_COUNT {
+        if self.direction.world().is_none()
+            && id.count() < LED_COUNT
+            && (id.count() < 3 || id.resolution != Resolution::Geometry)
+        {
             self.remember_labels(this, t, id, &vision);
             return self.refused(t, Refusal::NoWorld);
         }
