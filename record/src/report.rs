@@ -90,6 +90,9 @@ pub struct ReplayReport {
     /// Median and worst of `strokes_floor`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub strokes_floor_summary: Option<StrokesSummary>,
+    /// Why stereo pairs gave no vision tip, per reason.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vision_refusals: Option<VisionRefusals>,
 }
 
 /// The live display of the tip: its filter and, with ground truth, how well it follows the pen.
@@ -150,6 +153,72 @@ pub struct StrokesSummary {
     pub coverage_3mm: MedianWorst,
     /// Tracked over true length.
     pub length_ratio: MedianWorst,
+}
+
+/// Stereo pairs and why those without a vision tip were refused (`vision_refusals`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct VisionRefusals {
+    /// Camera frames not paired with the other camera (no other frame yet, or too far apart in time).
+    pub unpaired_frames: usize,
+    /// All stereo pairs.
+    pub all: PairRefusals,
+    /// The pairs in which both cameras truly see at least three LEDs (with ground truth).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub truly_visible: Option<PairRefusals>,
+}
+
+/// A set of stereo pairs: how many gave a vision tip, and what each refusal reason cost.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PairRefusals {
+    /// Stereo pairs.
+    pub pairs: usize,
+    /// Pairs with a vision tip.
+    pub vision: usize,
+    /// `vision / pairs` (`null` over zero pairs).
+    pub vision_fraction: Option<f64>,
+    /// Pairs refused, per reason.
+    pub refused: RefusalCounts,
+}
+
+/// Refused stereo pairs per reason, attributed in pipeline order (docs/report.md, "Vision refusals").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RefusalCounts {
+    /// Blob detection: a camera has fewer than three blobs.
+    pub blobs: usize,
+    /// Correspondence: fewer than three stereo candidates.
+    pub correspondence: usize,
+    /// Identification: fewer than two candidates used.
+    pub too_few_candidates: usize,
+    /// Identification: no labelling fits the distances, the line and the cross ratio.
+    pub distances: usize,
+    /// Identification: every fitting labelling disagrees with the fused direction.
+    pub direction_prior: usize,
+    /// Identification: a mirror-symmetric labelling that no prior resolves.
+    pub mirror: usize,
+    /// Identification: several labellings and no prior.
+    pub no_prior: usize,
+    /// Identification: several labellings agree with the priors.
+    pub several_agree: usize,
+    /// Identification: several labellings, none agrees with the priors.
+    pub none_agrees: usize,
+    /// Identification: a three-LED labelling with a scaled twin, unconfirmed by continuity.
+    pub twin: usize,
+    /// Identification: a conflicting rival labelling.
+    pub rival: usize,
+    /// Identification: LEDs would trade places with the previous frame's.
+    pub trading_places: usize,
+    /// Identification: the labelled pen does not explain the image blobs.
+    pub image_evidence: usize,
+    /// The tip could not be computed.
+    pub tip: usize,
+    /// Fewer than four LEDs labelled before the world reference is accepted.
+    pub world_not_accepted: usize,
+    /// Safety: two LEDs not confirmed by a fresh prior and the predicted motion.
+    pub safety_two_leds: usize,
+    /// Safety: the pen's LED images overlap.
+    pub safety_pen_images: usize,
+    /// Safety: a blob next to a labelled blob.
+    pub safety_crowded: usize,
 }
 
 /// The decoder's counters and the bytes read: the `link` block, and the last line of `fires decode`.

@@ -13,6 +13,7 @@ pub mod floor;
 pub mod imu_stream;
 pub mod plot;
 pub mod plot_text;
+pub mod refusals;
 pub mod report;
 pub mod run;
 pub mod strokes_vs_truth;

@@ -236,7 +236,12 @@ pub fn replay_report(
         strokes_summary: None,
         strokes_floor: None,
         strokes_floor_summary: None,
+        vision_refusals: None,
     };
+    report.vision_refusals = Some(super::refusals::vision_refusals(
+        out,
+        exposure_truth.as_deref(),
+    ));
     let tip_truth = tip_truth(reader)?;
     let display: Vec<(u64, [f64; 3])> = out
         .samples

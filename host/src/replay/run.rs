@@ -10,7 +10,7 @@ use crate::meta::{checked_pen_geometry, imu_scale, stereo_rig, MetaError};
 use crate::session::{Session, StrokeConfig};
 use crate::stereo::CameraId;
 use crate::track::fusion::{MagOffset, WorldFit, WorldReference};
-use crate::track::pipeline::{CameraFrame, TrackSample, Tracker, TrackerConfig};
+use crate::track::pipeline::{CameraFrame, Refusal, TrackSample, Tracker, TrackerConfig};
 use crate::vision::{BlobConfig, BlobDetector, GrayImage};
 
 /// What to run.
@@ -88,6 +88,17 @@ pub struct LabelPixels {
     pub px: [Option<([f64; 2], [f64; 2])>; 4],
 }
 
+/// One stereo pair's frames and why it gave no vision tip.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairOutcome {
+    /// Index of the left frame.
+    pub left_frame: u64,
+    /// Index of the right frame.
+    pub right_frame: u64,
+    /// Why the pair gave no vision tip (None when it gave one).
+    pub refusal: Option<Refusal>,
+}
+
 /// Everything a replay produced.
 #[derive(Debug, Clone)]
 pub struct ReplayOutput {
@@ -97,6 +108,10 @@ pub struct ReplayOutput {
     pub display_tips: Vec<Option<[f64; 3]>>,
     /// For each sample, the image blobs its labels name (None for IMU-driven samples).
     pub label_pixels: Vec<Option<LabelPixels>>,
+    /// Every stereo pair (one per frame sample), in order.
+    pub pairs: Vec<PairOutcome>,
+    /// Camera frames the tracker could not pair with the other camera's.
+    pub unpaired_frames: usize,
     /// Finished strokes.
     pub strokes: Vec<fires_record::Stroke>,
     /// Name of the display filter behind `display_tips` ("one-euro" or "thesis").
@@ -194,6 +209,8 @@ pub fn replay(
     let mut samples = Vec::new();
     let mut display_tips = Vec::new();
     let mut label_pixels = Vec::new();
+    let mut pairs = Vec::new();
+    let mut unpaired_frames = 0;
     let mut last: [LastFrame; 2] = [None, None];
     let mut buttons = imu.buttons.iter().peekable();
     for event in events {
@@ -230,8 +247,17 @@ pub fn replay(
                 let t = Instant::now();
                 if let Some(s) = session.frame(frame) {
                     label_pixels.push(labelled_pixels(&s.track, &last));
+                    if let (Some((l, _)), Some((r, _))) = (&last[0], &last[1]) {
+                        pairs.push(PairOutcome {
+                            left_frame: *l,
+                            right_frame: *r,
+                            refusal: session.tracker().last_refusal(),
+                        });
+                    }
                     samples.push(s.track);
                     display_tips.push(s.display_tip);
+                } else {
+                    unpaired_frames += 1;
                 }
                 times.track_ns += t.elapsed().as_nanos() as u64;
             }
@@ -246,6 +272,8 @@ pub fn replay(
         samples,
         display_tips,
         label_pixels,
+        pairs,
+        unpaired_frames,
         strokes,
         display_filter: config.strokes.display.name(),
         imu,

@@ -34,7 +34,9 @@ mod stress_tests;
 pub mod synth;
 pub mod tip;
 
-pub use identify::{Identification, Identifier, IdentifyConfig, IdentifyError, IdentifyPrior};
+pub use identify::{
+    Identification, Identifier, IdentifyConfig, IdentifyError, IdentifyPrior, RefusedBy,
+};
 pub use pen::{PenGeometry, LED_COUNT};
 pub use pipeline::{CameraFrame, TrackQuality, TrackSample, Tracker, TrackerConfig};
 pub use tip::{TipError, TipEstimate, TipEstimator};

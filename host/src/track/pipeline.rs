@@ -28,15 +28,21 @@
 mod align;
 mod clock_offset;
 mod config;
+mod line_order;
 mod prior;
+mod refusal;
 mod safety;
 #[cfg(test)]
 mod tests;
 
 pub use config::{DirectionSource, TrackerConfig};
+pub use refusal::Refusal;
+pub use safety::Unsafe;
 
 use super::fusion::{ImuSample, MagOffset, TipDeadReckoner, TipFilter, WorldFit, WorldReference};
-use super::identify::{Identification, Identifier, IdentifyError, IdentifyPrior};
+use super::identify::{
+    Identification, Identifier, IdentifyError, IdentifyPrior, RefusedBy, Resolution,
+};
 use super::pen::{PenError, LED_COUNT};
 use super::tip::{TipEstimate, TipEstimator};
 use crate::stereo::{CameraId, Correspondences, StereoRig, Triangulator};
@@ -143,6 +149,8 @@ pub struct Tracker {
     tip_filter: TipFilter,
     last_gyro: Option<(u64, Vector3<f64>)>,
     occluded: bool,
+    /// Why the last pair gave no vision tip (None when it gave one).
+    last_refusal: Option<Refusal>,
 }
 
 impl Tracker {
@@ -165,6 +173,7 @@ impl Tracker {
             tip_filter: TipFilter::new(config.tip_filter),
             last_gyro: None,
             occluded: false,
+            last_refusal: None,
             rig,
             config,
         })
@@ -200,6 +209,12 @@ impl Tracker {
         self.config
             .right_clock_offset_ns
             .saturating_add(self.clock.offset_ns())
+    }
+
+    /// Why the last stereo pair (the last sample [`Self::push_frame`] returned) gave no vision
+    /// tip; None when it gave one.
+    pub fn last_refusal(&self) -> Option<Refusal> {
+        self.last_refusal
     }
 
     /// Feeds one IMU sample. While the tip is occluded this returns a dead-reckoned (or, after the
@@ -283,16 +298,25 @@ impl Tracker {
         );
         let stale = direction_sigma.is_some_and(|s| s > self.config.identify.prior_sigma);
         // Identification.
+        self.last_refusal = None;
         let id = match self
             .identifier
             .identify_with_images(cands, &prior, left, right)
         {
             Ok(id) => id,
-            Err(e) => return self.no_vision_sample(t, e),
+            Err(e) => {
+                let by = self.identifier.refused_by().unwrap_or(match e {
+                    IdentifyError::TooFewCandidates => RefusedBy::TooFewCandidates,
+                    IdentifyError::NoConsistentSet => RefusedBy::Distances,
+                    IdentifyError::ContradictedByImage => RefusedBy::ImageEvidence,
+                    IdentifyError::Ambiguous => RefusedBy::Rival,
+                });
+                return self.refused(t, Refusal::Identify(by));
+            }
         };
         // The vision tip (its axis also feeds the safety checks and the fusion).
         let Ok(vision) = self.tip.estimate(&id.points) else {
-            return self.no_vision_sample(t, IdentifyError::NoConsistentSet);
+            return self.refused(t, Refusal::Tip);
         };
         // Safety.
         let pair = PairView {
@@ -303,8 +327,8 @@ impl Tracker {
             tip: &self.tip,
             t,
         };
-        if !self.labels.is_safe(&pair, &id, &vision, stale) {
-            return self.no_vision_sample(t, IdentifyError::Ambiguous);
+        if let Some(why) = self.labels.check(&pair, &id, &vision, stale) {
+            return self.refused(t, Refusal::Safety(why));
         }
         // Fusion and the sample.
         self.vision_sample(this, t, &id, vision)
@@ -322,13 +346,18 @@ impl Tracker {
         if let Some(world) = self.direction.observe_labelled(t, id, &vision.direction) {
             self.reckoner.set_world(world);
         }
-        // Without a world reference there is no direction prior, and only the four-LED pattern
-        // (cross-ratio, no mirror image) is safe to report. Other labellings are kept for time
+        // Without a world reference there is no direction prior. Safe to report are the
+        // four-LED pattern (cross-ratio, no mirror image) and three LEDs that the geometry alone
+        // labelled (their spacing is not mirror-symmetric, a scaled twin needed continuity, and
+        // no rival fits). Other labellings (two LEDs, or resolved by a prior) are kept for time
         // alignment and continuity (a mirrored chain still tracks each blob consistently) but
         // give no tip.
-        if self.direction.world().is_none() && id.count() < LED_COUNT {
+        if self.direction.world().is_none()
+            && id.count() < LED_COUNT
+            && (id.count() < 3 || id.resolution != Resolution::Geometry)
+        {
             self.remember_labels(this, t, id, &vision);
-            return self.no_vision_sample(t, IdentifyError::Ambiguous);
+            return self.refused(t, Refusal::NoWorld);
         }
         let cands = &self.correspondences.candidates;
         self.clock.observe(&self.rig, &self.points, cands, id);
@@ -392,8 +421,17 @@ impl Tracker {
         );
     }
 
+    /// A pair refused at `stage`: the reason is attributed ([`refusal::attribute`]) and kept for
+    /// [`Self::last_refusal`].
+    fn refused(&mut self, t: u64, stage: Refusal) -> TrackSample {
+        let blobs = [self.points.left_norm.len(), self.points.right_norm.len()];
+        let cands = self.correspondences.candidates.len();
+        self.last_refusal = Some(refusal::attribute(blobs, cands, stage));
+        self.no_vision_sample(t)
+    }
+
     /// A pair without a vision tip: occluded from now, dead-reckoned while the reckoner can.
-    fn no_vision_sample(&mut self, t: u64, _why: IdentifyError) -> TrackSample {
+    fn no_vision_sample(&mut self, t: u64) -> TrackSample {
         self.occluded = true;
         let direction = self.direction.direction_at(t);
         match self.reckoner.current(t) {

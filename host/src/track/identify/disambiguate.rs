@@ -4,7 +4,7 @@
 //! one labelling the frame is refused.
 
 use super::{
-    labelled_points, shares_blob, Hypothesis, Identifier, IdentifyError, IdentifyPrior, Resolution,
+    labelled_points, shares_blob, Hypothesis, Identifier, IdentifyPrior, RefusedBy, Resolution,
 };
 use crate::stereo::Candidate;
 use crate::track::line_fit::labelled_direction;
@@ -17,12 +17,12 @@ impl Identifier {
         cands: &[Candidate],
         size: usize,
         prior: &IdentifyPrior,
-    ) -> Result<(Hypothesis, Resolution), IdentifyError> {
+    ) -> Result<(Hypothesis, Resolution), RefusedBy> {
         let mut top = self
             .hypotheses
             .iter()
             .filter(|h| h.size == size && !h.refused);
-        let first = *top.next().ok_or(IdentifyError::NoConsistentSet)?;
+        let first = *top.next().ok_or(RefusedBy::Distances)?;
         if top.next().is_none() {
             if !first.needs_prior {
                 return Ok((first, Resolution::Geometry));
@@ -32,11 +32,11 @@ impl Identifier {
             return if resolved {
                 Ok((first, Resolution::Prior))
             } else {
-                Err(IdentifyError::Ambiguous)
+                Err(RefusedBy::Mirror)
             };
         }
         if prior.direction.is_none() && prior.previous.iter().all(Option::is_none) {
-            return Err(IdentifyError::Ambiguous);
+            return Err(RefusedBy::NoPrior);
         }
         let mut survivor = None;
         for h in self
@@ -46,14 +46,14 @@ impl Identifier {
         {
             if self.agrees_with_prior(cands, h, prior) {
                 if survivor.is_some() {
-                    return Err(IdentifyError::Ambiguous);
+                    return Err(RefusedBy::SeveralAgree);
                 }
                 survivor = Some(*h);
             }
         }
         survivor
             .map(|h| (h, Resolution::Prior))
-            .ok_or(IdentifyError::Ambiguous)
+            .ok_or(RefusedBy::NoneAgrees)
     }
 
     pub(super) fn agrees_with_prior(

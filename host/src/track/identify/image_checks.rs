@@ -38,6 +38,7 @@ impl Identifier {
         if self.image_consistent(candidates, &id, [left, right]) {
             Ok(id)
         } else {
+            self.refused_by = Some(super::RefusedBy::ImageEvidence);
             Err(IdentifyError::ContradictedByImage)
         }
     }

@@ -92,6 +92,46 @@ pub enum IdentifyError {
     ContradictedByImage,
 }
 
+/// Which identification test refused the last frame (finer than [`IdentifyError`]; what
+/// `report.json` → `vision_refusals` counts, docs/report.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub enum RefusedBy {
+    /// Fewer than two candidates.
+    TooFewCandidates,
+    /// No labelling fits the physical distances (and the line, the cross ratio) within the bands.
+    Distances,
+    /// Labellings fit the distances but all disagree with the fused direction.
+    DirectionPrior,
+    /// The only labelling is also consistent mirrored and no prior resolves it.
+    Mirror,
+    /// Several labellings fit and there is no prior at all.
+    NoPrior,
+    /// Several labellings fit and more than one agrees with the priors.
+    SeveralAgree,
+    /// Several labellings fit and none agrees with the priors.
+    NoneAgrees,
+    /// A three-LED labelling with a scaled twin that continuity does not confirm.
+    Twin,
+    /// A conflicting rival labelling agrees with the priors as well.
+    Rival,
+    /// A labelled LED sits where another LED was in the previous frame (trading places).
+    TradingPlaces,
+    /// The labelled pen does not explain the image blobs (image line, cross ratio in the image).
+    ImageEvidence,
+}
+
+impl RefusedBy {
+    /// The coarse error of this refusal.
+    pub fn error(self) -> IdentifyError {
+        match self {
+            RefusedBy::TooFewCandidates => IdentifyError::TooFewCandidates,
+            RefusedBy::Distances | RefusedBy::DirectionPrior => IdentifyError::NoConsistentSet,
+            RefusedBy::ImageEvidence => IdentifyError::ContradictedByImage,
+            _ => IdentifyError::Ambiguous,
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Hypothesis {
     assignment: [Option<usize>; LED_COUNT],
@@ -120,6 +160,8 @@ pub struct Identifier {
     hypotheses: Vec<Hypothesis>,
     /// The twin scale bound of the frame being identified.
     twin_scale: f64,
+    /// The test that refused the last frame (None when it was labelled).
+    refused_by: Option<RefusedBy>,
 }
 
 impl Identifier {
@@ -134,6 +176,7 @@ impl Identifier {
             geometry: None,
             hypotheses: Vec::with_capacity(64),
             twin_scale: config.twin_scale_max,
+            refused_by: None,
         })
     }
 
@@ -160,15 +203,31 @@ impl Identifier {
         &self.config
     }
 
+    /// The test that refused the last frame given to [`Self::identify`] or
+    /// [`Self::identify_with_images`] (None when it was labelled).
+    pub fn refused_by(&self) -> Option<RefusedBy> {
+        self.refused_by
+    }
+
     /// Labels the candidates, or refuses.
     pub fn identify(
         &mut self,
         candidates: &[Candidate],
         prior: &IdentifyPrior,
     ) -> Result<Identification, IdentifyError> {
+        let result = self.identify_inner(candidates, prior);
+        self.refused_by = result.as_ref().err().copied();
+        result.map_err(RefusedBy::error)
+    }
+
+    fn identify_inner(
+        &mut self,
+        candidates: &[Candidate],
+        prior: &IdentifyPrior,
+    ) -> Result<Identification, RefusedBy> {
         let cands = &candidates[..candidates.len().min(self.config.max_candidates)];
         if cands.len() < 2 {
-            return Err(IdentifyError::TooFewCandidates);
+            return Err(RefusedBy::TooFewCandidates);
         }
         self.twin_scale = prior
             .scale_error_max
@@ -177,6 +236,7 @@ impl Identifier {
                 s.min(self.config.twin_scale_max)
             });
         self.collect_hypotheses(cands);
+        let fitting = self.hypotheses.iter().any(|h| !h.refused);
         if let Some(dir) = prior.direction {
             // Labellings that disagree with the fused direction (beyond its noise and theirs)
             // are never accepted: this removes mirrored labellings and most ghost pens.
@@ -200,16 +260,20 @@ impl Identifier {
             .filter(|h| !h.refused)
             .map(|h| h.size)
             .max()
-            .ok_or(IdentifyError::NoConsistentSet)?;
+            .ok_or(if fitting {
+                RefusedBy::DirectionPrior
+            } else {
+                RefusedBy::Distances
+            })?;
         let (chosen, resolution) = self.choose(cands, best_size, prior)?;
         if chosen.needs_continuity && !self.continuity_confirms(cands, &chosen, prior) {
-            return Err(IdentifyError::Ambiguous);
+            return Err(RefusedBy::Twin);
         }
         if self.has_conflicting_rival(cands, &chosen, prior) {
-            return Err(IdentifyError::Ambiguous);
+            return Err(RefusedBy::Rival);
         }
         if self.switches_identity(cands, &chosen, prior) {
-            return Err(IdentifyError::Ambiguous);
+            return Err(RefusedBy::TradingPlaces);
         }
         Ok(self.finish(cands, chosen, resolution))
     }

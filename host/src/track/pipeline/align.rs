@@ -6,6 +6,7 @@
 //! where the LEDs image in frames no vision sample labelled. Times are on the left camera's clock
 //! (docs/architecture.md §3).
 
+use super::line_order::{match_along_line, LineOrderOptions};
 use super::TrackerConfig;
 use crate::stereo::{CameraId, CameraModel, StereoRig};
 use crate::track::pen::LED_COUNT;
@@ -240,6 +241,21 @@ impl TimeAlignment {
                 out.push((i, [b[0] + v[0] * shift, b[1] + v[1] * shift], v));
             }
         }
+        if out.is_empty() {
+            if let Some(p) = prev {
+                // No LED identities: match the two frames' blobs by their order along the pen line.
+                let o = LineOrderOptions {
+                    max_motion_px: self.options.max_blob_motion_px,
+                    ..LineOrderOptions::default()
+                };
+                let dt = (cur.t_ns - p.t_ns) as f64;
+                for (q, i) in match_along_line(&p.blobs, &cur.blobs, &o).unwrap_or_default() {
+                    let (a, b) = (p.blobs[q], cur.blobs[i]);
+                    let v = [(b[0] - a[0]) / dt, (b[1] - a[1]) / dt];
+                    out.push((i, [b[0] + v[0] * shift, b[1] + v[1] * shift], v));
+                }
+            }
+        }
         out
     }
 
@@ -460,5 +476,38 @@ mod tests {
         still.prepare(&rig, 0, 33_000_000, &mut points);
         assert_eq!(points.aligned, at(26_000_000));
         assert!(points.aligned_velocity.iter().all(Option::is_none));
+    }
+
+    /// Without labels or a pose (the pen just reappeared) the blobs of consecutive frames are
+    /// matched along the pen line, in any blob order, and moved with their measured velocity.
+    #[test]
+    fn unlabelled_blobs_on_the_pen_line_move_with_their_velocity() {
+        let rig = rig();
+        let mut a = TimeAlignment::new(OPTIONS);
+        let v = [2.0e-7, -1.0e-7];
+        let start = [[400.0, 300.0], [432.0, 324.0], [472.0, 354.0]];
+        let at = |t: u64| -> Vec<[f64; 2]> {
+            start
+                .iter()
+                .map(|b| [b[0] + v[0] * t as f64, b[1] + v[1] * t as f64])
+                .collect()
+        };
+        a.push(1, 10_000_000, at(10_000_000));
+        let mut shuffled = at(76_000_000);
+        shuffled.swap(0, 2);
+        a.push(1, 76_000_000, shuffled);
+        let moved = a.alignment(&rig, 1, 100_000_000);
+        assert_eq!(moved.len(), 3);
+        let mut want = at(100_000_000);
+        want.swap(0, 2);
+        for (i, p, vel) in moved {
+            assert!((p[0] - want[i][0]).abs() < 1e-9 && (p[1] - want[i][1]).abs() < 1e-9);
+            assert!((vel[0] - v[0]).abs() < 1e-15 && (vel[1] - v[1]).abs() < 1e-15);
+        }
+        // Blobs that are not on one line (interference) are not moved.
+        let mut off = at(142_000_000);
+        off[1][1] += 8.0;
+        a.push(1, 142_000_000, off);
+        assert!(a.alignment(&rig, 1, 150_000_000).is_empty());
     }
 }

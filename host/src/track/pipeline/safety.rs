@@ -27,6 +27,17 @@ pub(super) struct PairView<'a> {
     pub(super) t: u64,
 }
 
+/// Which labelling-safety check refused a labelling.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub enum Unsafe {
+    /// Two LEDs with a stale prior or not where the recent motion predicts them.
+    TwoLedsUnconfirmed,
+    /// The LED images of the labelled pen lie too close together in an image.
+    PenImagesOverlap,
+    /// Another blob lies next to a labelled blob (a crowded image).
+    BlobNotIsolated,
+}
+
 /// Accepted labels and the checks a new labelling must pass.
 #[derive(Debug, Clone)]
 pub(super) struct LabelGuard {
@@ -60,6 +71,7 @@ impl LabelGuard {
     /// camera or turns fast) also fits. So two LEDs need the fused direction and temporal
     /// continuity (FIRES thesis, §4.1.2), i.e. must sit where the pen's recent motion predicts
     /// them. Any labelling needs well separated LED images and isolated labelled blobs.
+    #[cfg(test)]
     pub(super) fn is_safe(
         &self,
         pair: &PairView<'_>,
@@ -67,10 +79,24 @@ impl LabelGuard {
         vision: &TipEstimate,
         stale_prior: bool,
     ) -> bool {
+        self.check(pair, id, vision, stale_prior).is_none()
+    }
+
+    /// The first check of [`Self::is_safe`] that the labelling fails, None when it is safe.
+    pub(super) fn check(
+        &self,
+        pair: &PairView<'_>,
+        id: &Identification,
+        vision: &TipEstimate,
+        stale_prior: bool,
+    ) -> Option<Unsafe> {
         if id.count() < 3 && (stale_prior || !self.labels_match_prediction(pair, id)) {
-            return false;
+            return Some(Unsafe::TwoLedsUnconfirmed);
         }
-        self.pen_images_separated(pair, vision) && self.labelled_blobs_isolated(pair, id)
+        if !self.pen_images_separated(pair, vision) {
+            return Some(Unsafe::PenImagesOverlap);
+        }
+        (!self.labelled_blobs_isolated(pair, id)).then_some(Unsafe::BlobNotIsolated)
     }
 
     /// True when no other blob lies within `min_image_separation_px` of a labelled blob, in

@@ -220,6 +220,17 @@ fn tip_from_leds_2_to_4_with_fusion() {
     };
     let mut vision = simulate(vision_cfg, 10.0, None, 6);
     HIDE_LED1.with(|h| h.set(false));
+    // Before the world estimate is accepted there is no fused axis: three LEDs give vision-axis
+    // tips there, so the fused run is judged from the acceptance on.
+    let t_world = fused.world_fit.map_or(0.0, |(t, _)| t as f64 * 1e-9);
+    let keep: Vec<f64> = fused
+        .errors
+        .iter()
+        .zip(&fused.vision_t)
+        .filter(|(_, t)| **t >= t_world)
+        .map(|(e, _)| *e)
+        .collect();
+    fused.errors = keep;
     let within = |e: &[f64]| e.iter().filter(|v| **v < 0.002).count() as f64 / e.len() as f64;
     let (pf, pv) = (within(&fused.errors), within(&vision.errors));
     eprintln!(
@@ -491,8 +502,13 @@ fn a_three_led_pen_is_relabelled_after_an_occlusion() {
     // Relabelled at the first frames (60 frames/s per camera)...
     assert!(fa.is_some_and(|t| t < 5.05), "{fa:?}");
     assert!(a * 10 >= 2 * 180 * 8, "{a} of 360 frames");
-    // ...while without it the pen waits for a frame the geometry settles alone.
-    assert!(fb.is_none_or(|t| t > 5.3), "{fb:?}");
+    // ...while without it the pen waits for a frame the geometry settles alone (the blobs
+    // matched along the pen line between frames are time-aligned, so that comes after a few
+    // frames).
+    assert!(
+        fb.is_none_or(|t| fa.is_some_and(|fa| t > fa + 0.05)),
+        "{fb:?}"
+    );
     assert!(a > b, "{a} vs {b}");
 }
 
@@ -542,4 +558,24 @@ fn occlusion_is_dead_reckoned_then_lost() {
     assert_eq!(s.wrong_labels, 0);
     assert!(s.dead_reckoned > 20, "{}", s.dead_reckoned);
     assert!(s.lost > 20, "{}", s.lost);
+}
+
+/// LEDs 2-4 only (LED 1 dark) and no world reference yet: three LEDs that the geometry alone
+/// labels (no mirror image, no rival) give vision tips before the world estimate is accepted,
+/// with no wrong label.
+#[test]
+fn three_leds_give_tips_before_the_world_is_accepted() {
+    HIDE_LED1.with(|h| h.set(true));
+    let run = simulate(TrackerConfig::default(), 6.0, None, 6);
+    HIDE_LED1.with(|h| h.set(false));
+    let t_world = run
+        .world_fit
+        .map_or(f64::INFINITY, |(t, _)| t as f64 * 1e-9);
+    let before = run.vision_t.iter().filter(|t| **t < t_world).count();
+    eprintln!("world accepted at {t_world:.2} s, {before} vision samples before");
+    assert_eq!(run.wrong_labels, 0);
+    assert!(
+        before >= 60,
+        "{before} vision samples before the world at {t_world} s"
+    );
 }
