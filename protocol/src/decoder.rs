@@ -78,13 +78,9 @@ pub struct Decoded {
 #[derive(Clone, Copy)]
 enum Held {
     None,
-    /// Locked; released when the next two bytes are a sync pair, or, when garbage follows, if `continued` (it
-    /// continues the candidate before it) and it shows no sign of a lost byte.
-    AwaitSync {
-        raw: [u8; FRAME_LEN],
-        end: u64,
-        continued: bool,
-    },
+    /// Locked; released when the next two bytes are a sync pair, or, when garbage follows, if it continues the
+    /// candidate before it (`StreamDecoder::held_continues`) and shows no sign of a lost byte.
+    AwaitSync([u8; FRAME_LEN], u64),
     /// Not locked; released when the next whole frame is valid.
     AwaitNext([u8; FRAME_LEN], u64),
 }
@@ -99,6 +95,8 @@ pub struct StreamDecoder {
     contiguous: bool,
     /// The previous candidate's header (meaningful while `contiguous`).
     prev: Header,
+    /// A locked held frame continues the candidate before it.
+    held_continues: bool,
     last_sensor: Option<[u8; FRAME_LEN]>,
     last_status: Option<[u8; FRAME_LEN]>,
     offset: u64,
@@ -120,6 +118,7 @@ impl StreamDecoder {
             held: Held::None,
             contiguous: false,
             prev: Header([0; 3]),
+            held_continues: false,
             last_sensor: None,
             last_status: None,
             offset: 0,
@@ -146,7 +145,7 @@ impl StreamDecoder {
 
     /// Whether the decoder is locked (the last candidate was accepted and nothing was skipped since).
     pub fn is_locked(&self) -> bool {
-        self.contiguous && matches!(self.held, Held::AwaitSync { .. } | Held::None)
+        self.contiguous && matches!(self.held, Held::AwaitSync(..) | Held::None)
     }
 
     /// Feeds one byte; returns the frame it releases, if any (at most one per byte).
@@ -203,7 +202,7 @@ impl StreamDecoder {
     /// Ends the stream: releases a locked last frame and counts the unfinished tail as skipped.
     pub fn finish(&mut self) -> Option<Decoded> {
         let out = match self.held {
-            Held::AwaitSync { raw, end, .. } => self.emit(raw, end),
+            Held::AwaitSync(raw, end) => self.emit(raw, end),
             Held::AwaitNext(..) => {
                 self.stats.bytes_skipped += FRAME_LEN as u64;
                 None
@@ -219,39 +218,48 @@ impl StreamDecoder {
 
     /// Advances the state machine over the buffered bytes after one byte was appended.
     fn settle(&mut self) -> Option<Decoded> {
+        // At most one frame comes out per byte: a frame released because garbage follows it leaves nothing held,
+        // and fewer than 22 bytes buffered, so neither a sync pair nor a candidate can release another.
+        let mut out = None;
         loop {
             if self.len == 0 {
-                return None;
+                return out;
             }
             if self.buf[0] != SYNC0 {
                 let first = self.buf[0];
                 if self.drop_front() {
-                    return self.garbage_after_held(first);
+                    out = self.garbage_after_held(first);
                 }
                 continue;
             }
             if self.len < 2 {
-                return None;
+                return out;
             }
             if !is_sync1(self.buf[1]) {
                 let first = self.buf[0];
                 if self.drop_front() {
-                    return self.garbage_after_held(first);
+                    out = self.garbage_after_held(first);
                 }
                 continue;
             }
             if self.len == 2 {
+                if out.is_some() {
+                    return out;
+                }
                 return self.release_on_sync();
             }
             if self.len < FRAME_LEN {
-                return None;
+                return out;
             }
             if xor(&self.buf) != 0 {
                 self.stats.checksum_errors += 1;
                 if self.drop_front() {
-                    return self.garbage_after_held(SYNC0);
+                    out = self.garbage_after_held(SYNC0);
                 }
                 continue;
+            }
+            if out.is_some() {
+                return out;
             }
             return self.accept_candidate();
         }
@@ -259,7 +267,7 @@ impl StreamDecoder {
 
     /// A sync pair follows the held frame directly: a locked frame is released.
     fn release_on_sync(&mut self) -> Option<Decoded> {
-        if let Held::AwaitSync { raw, end, .. } = self.held {
+        if let Held::AwaitSync(raw, end) = self.held {
             self.held = Held::None;
             return self.emit(raw, end);
         }
@@ -277,11 +285,8 @@ impl StreamDecoder {
         match self.held {
             Held::AwaitNext(first, first_end) => {
                 if Header::of(&first).continued_by(&raw) {
-                    self.held = Held::AwaitSync {
-                        raw,
-                        end,
-                        continued: true,
-                    };
+                    self.held = Held::AwaitSync(raw, end);
+                    self.held_continues = true;
                     self.emit(first, first_end)
                 } else {
                     self.stats.bytes_skipped += FRAME_LEN as u64;
@@ -290,15 +295,12 @@ impl StreamDecoder {
                 }
             }
             _ => {
-                self.held = if after_previous {
-                    Held::AwaitSync {
-                        raw,
-                        end,
-                        continued: prev.continued_by(&raw),
-                    }
+                if after_previous {
+                    self.held = Held::AwaitSync(raw, end);
+                    self.held_continues = prev.continued_by(&raw);
                 } else {
-                    Held::AwaitNext(raw, end)
-                };
+                    self.held = Held::AwaitNext(raw, end);
+                }
                 None
             }
         }
@@ -318,22 +320,20 @@ impl StreamDecoder {
     /// `buf` starts right after it; an unlocked one also until the next 22 bytes are complete): a locked frame that continues the frame before it and shows no sign of a
     /// lost byte is released; any other held frame is dropped. A frame that lost a byte and passed the checksum
     /// with the next frame's 0x20 ends in 0x20 and is followed by that frame's second sync byte: the next sync
-    /// pair one byte early. Then settles the rest of the buffer (which cannot release another frame).
+    /// pair one byte early.
     #[cold]
     fn garbage_after_held(&mut self, first: u8) -> Option<Decoded> {
-        let out = match core::mem::replace(&mut self.held, Held::None) {
-            Held::AwaitSync {
-                raw,
-                end,
-                continued: true,
-            } if !(raw[FRAME_LEN - 1] == SYNC0 && is_sync1(first)) => self.emit(raw, end),
+        match core::mem::replace(&mut self.held, Held::None) {
+            Held::AwaitSync(raw, end)
+                if self.held_continues && !(raw[FRAME_LEN - 1] == SYNC0 && is_sync1(first)) =>
+            {
+                self.emit(raw, end)
+            }
             _ => {
                 self.stats.bytes_skipped += FRAME_LEN as u64;
                 None
             }
-        };
-        let rest = self.settle();
-        out.or(rest)
+        }
     }
 
     /// Releases a confirmed frame, updating counters.
