@@ -55,7 +55,11 @@ fn stream_decoder_inputs_keep_the_targets_invariants() {
             _ => None,
         };
         if let Some((sensor, status, lost)) = expected {
-            assert_eq!((s.sensor_frames, s.status_frames, s.lost), (sensor, status, lost), "{name}");
+            assert_eq!(
+                (s.sensor_frames, s.status_frames, s.lost),
+                (sensor, status, lost),
+                "{name}"
+            );
         }
     }
 }
