@@ -316,11 +316,11 @@ impl StreamDecoder {
         !matches!(self.held, Held::None)
     }
 
-    /// Rule 3 when `first`, the byte right after the held frame, is garbage (a locked frame is held only while
-    /// `buf` starts right after it; an unlocked one also until the next 22 bytes are complete): a locked frame that continues the frame before it and shows no sign of a
-    /// lost byte is released; any other held frame is dropped. A frame that lost a byte and passed the checksum
-    /// with the next frame's 0x20 ends in 0x20 and is followed by that frame's second sync byte: the next sync
-    /// pair one byte early.
+    /// Rule 3 when garbage follows the held frame. `first` is the dropped byte: for a locked frame, the one right
+    /// after it (a locked frame is held only while `buf` starts right after it). A locked frame that continues the
+    /// frame before it and shows no sign of a lost byte is released; any other held frame is dropped. A frame that
+    /// lost a byte and passed the checksum with the next frame's 0x20 ends in 0x20 and is followed by that frame's
+    /// second sync byte: the next sync pair one byte early.
     #[cold]
     fn garbage_after_held(&mut self, first: u8) -> Option<Decoded> {
         match core::mem::replace(&mut self.held, Held::None) {
