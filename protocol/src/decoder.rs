@@ -3,25 +3,31 @@
 //! The link is a serial byte stream with no framing beyond the packets' own sync pairs, so the decoder must find
 //! frame boundaries, survive garbage, lost and corrupted bytes, and never report a frame the pen did not send.
 //!
-//! **Acceptance rule.** A candidate is 22 bytes starting with a sync pair whose XOR checksum is zero. A candidate
-//! is *emitted* only when
-//! 1. the two bytes directly after it are a sync pair (so a frame that lost or gained a byte and passed the 8-bit
-//!    checksum by chance, 1 in 256, is still rejected: its successor's sync pair is then shifted by one byte), and
-//! 2. it is *locked*: the candidate directly before it was accepted, or the candidate directly after it is valid
-//!    too **and continues it** (see below). Lock therefore needs two consecutive valid frames, so random bytes
-//!    yield a frame with probability about 2^-58 per byte.
+//! **Acceptance rule** (hardware-docs/protocol.md §1.4). A candidate is 22 bytes starting with a sync pair whose
+//! XOR checksum is zero.
+//! 1. *Lock.* After a skipped byte the decoder is unlocked; an unlocked candidate is emitted only when the candidate
+//!    directly after it is valid too **and continues it** (see below). Lock therefore needs two consecutive valid
+//!    frames, so random bytes yield a frame with probability about 2^-58 per byte.
+//! 2. *Release.* A locked candidate (the one directly before it was accepted) is emitted as soon as the two bytes
+//!    after it are a sync pair. If garbage follows instead, it is emitted when it continues the candidate before
+//!    it and shows no sign of a lost byte: a frame that lost a byte and still passed the 8-bit checksum (1 in 256)
+//!    has the next frame's `0x20` as its last byte, so its last byte is `0x20` and the byte after it a second
+//!    sync byte (the next sync pair one byte early). Otherwise it is dropped.
 //!
 //! *Continuation* is what the pen guarantees of two frames sent back to back (hardware-docs/protocol.md):
 //! sensor -> sensor: counter + 1; sensor -> status: the status's `sensor_counter` equals the sensor counter;
 //! status -> sensor: counter = `sensor_counter` + 1; status -> status: sequence + 1. Requiring it when lock is
 //! acquired stops a window of garbage that ends exactly at a real frame boundary (a sync pair inside a corrupted
-//! payload, say) from being confirmed by the real frame after it. A pair that is not continuous (the pen
-//! dropped a packet between them) only delays lock by one frame.
+//! payload, say) from being confirmed by the real frame after it; requiring it for a release before garbage stops a
+//! window of garbage that starts right after a frame. A pair that is not continuous (the pen dropped a packet
+//! between them) only delays lock by one frame, and holds back a frame that garbage follows.
 //!
-//! The price is latency: a frame in lock is released two bytes (87 µs at 230 400 baud) after its end; the first
-//! frame after a loss of lock waits for the whole next frame. [`StreamDecoder::finish`] releases a locked last
-//! frame at the end of a stream. An intact frame that has garbage on both sides is indistinguishable from
-//! garbage and is dropped (it then shows up in `lost`).
+//! What this guarantees, and the false-frame bounds (the price of not dropping every frame that garbage follows),
+//! are listed in hardware-docs/protocol.md §1.4. The latency: a frame in lock is released at most two bytes (87 µs
+//! at 230 400 baud) after its end; the first frame after a loss of lock
+//! waits for the whole next frame. [`StreamDecoder::finish`] releases a locked last frame at the end of a stream.
+//! An intact frame that has garbage on both sides is indistinguishable from garbage and is dropped (it then shows
+//! up in `lost`).
 //!
 //! **Limit.** The guarantees hold for one fault per frame. The thesis's XOR checksum is blind to a permutation of
 //! a frame's bytes, so a frame that loses a byte and then gains a garbage byte of the same value before its end
@@ -36,6 +42,7 @@
 
 use crate::checksum::xor;
 use crate::frame::{is_sync1, Frame};
+use crate::sensor::SENSOR_SYNC1;
 use crate::{FRAME_LEN, SYNC0};
 
 /// Running totals of what the decoder has seen.
@@ -71,7 +78,8 @@ pub struct Decoded {
 #[derive(Clone, Copy)]
 enum Held {
     None,
-    /// Locked; released when the next two bytes are a sync pair.
+    /// Locked; released when the next two bytes are a sync pair, or, when garbage follows, if it continues the
+    /// candidate before it (`StreamDecoder::held_continues`) and shows no sign of a lost byte.
     AwaitSync([u8; FRAME_LEN], u64),
     /// Not locked; released when the next whole frame is valid.
     AwaitNext([u8; FRAME_LEN], u64),
@@ -85,6 +93,10 @@ pub struct StreamDecoder {
     held: Held,
     /// The previous candidate ended exactly where `buf` starts.
     contiguous: bool,
+    /// The previous candidate's header (meaningful while `contiguous`).
+    prev: Header,
+    /// A locked held frame continues the candidate before it.
+    held_continues: bool,
     last_sensor: Option<[u8; FRAME_LEN]>,
     last_status: Option<[u8; FRAME_LEN]>,
     offset: u64,
@@ -105,6 +117,8 @@ impl StreamDecoder {
             len: 0,
             held: Held::None,
             contiguous: false,
+            prev: Header([0; 3]),
+            held_continues: false,
             last_sensor: None,
             last_status: None,
             offset: 0,
@@ -204,31 +218,48 @@ impl StreamDecoder {
 
     /// Advances the state machine over the buffered bytes after one byte was appended.
     fn settle(&mut self) -> Option<Decoded> {
+        // At most one frame comes out per byte: a frame released because garbage follows it leaves nothing held,
+        // and fewer than 22 bytes buffered, so neither a sync pair nor a candidate can release another.
+        let mut out = None;
         loop {
             if self.len == 0 {
-                return None;
+                return out;
             }
             if self.buf[0] != SYNC0 {
-                self.drop_front();
+                let first = self.buf[0];
+                if self.drop_front() {
+                    out = self.garbage_after_held(first);
+                }
                 continue;
             }
             if self.len < 2 {
-                return None;
+                return out;
             }
             if !is_sync1(self.buf[1]) {
-                self.drop_front();
+                let first = self.buf[0];
+                if self.drop_front() {
+                    out = self.garbage_after_held(first);
+                }
                 continue;
             }
             if self.len == 2 {
+                if out.is_some() {
+                    return out;
+                }
                 return self.release_on_sync();
             }
             if self.len < FRAME_LEN {
-                return None;
+                return out;
             }
             if xor(&self.buf) != 0 {
                 self.stats.checksum_errors += 1;
-                self.drop_front();
+                if self.drop_front() {
+                    out = self.garbage_after_held(SYNC0);
+                }
                 continue;
+            }
+            if out.is_some() {
+                return out;
             }
             return self.accept_candidate();
         }
@@ -248,31 +279,60 @@ impl StreamDecoder {
         let raw = self.buf;
         self.len = 0;
         let end = self.offset;
-        let (out, next) = match self.held {
-            Held::AwaitNext(prev, prev_end) if continues(&prev, &raw) => {
-                (self.emit(prev, prev_end), Held::AwaitSync(raw, end))
-            }
-            Held::AwaitNext(..) => {
-                self.stats.bytes_skipped += FRAME_LEN as u64;
-                (None, Held::AwaitNext(raw, end))
-            }
-            _ if self.contiguous => (None, Held::AwaitSync(raw, end)),
-            _ => (None, Held::AwaitNext(raw, end)),
-        };
-        self.held = next;
+        let after_previous = self.contiguous;
         self.contiguous = true;
-        out
+        let prev = core::mem::replace(&mut self.prev, Header::of(&raw));
+        match self.held {
+            Held::AwaitNext(first, first_end) => {
+                if Header::of(&first).continued_by(&raw) {
+                    self.held = Held::AwaitSync(raw, end);
+                    self.held_continues = true;
+                    self.emit(first, first_end)
+                } else {
+                    self.stats.bytes_skipped += FRAME_LEN as u64;
+                    self.held = Held::AwaitNext(raw, end);
+                    None
+                }
+            }
+            _ => {
+                if after_previous {
+                    self.held = Held::AwaitSync(raw, end);
+                    self.held_continues = prev.continued_by(&raw);
+                } else {
+                    self.held = Held::AwaitNext(raw, end);
+                }
+                None
+            }
+        }
     }
 
-    /// Drops the first buffered byte; any held frame loses its confirmation and is dropped too.
-    fn drop_front(&mut self) {
+    /// Drops the first buffered byte; returns whether a frame is held, which garbage now follows.
+    #[inline]
+    fn drop_front(&mut self) -> bool {
         self.buf.copy_within(1..self.len, 0);
         self.len -= 1;
         self.stats.bytes_skipped += 1;
         self.contiguous = false;
-        if !matches!(self.held, Held::None) {
-            self.stats.bytes_skipped += FRAME_LEN as u64;
-            self.held = Held::None;
+        !matches!(self.held, Held::None)
+    }
+
+    /// Rule 3 when garbage follows the held frame. `first` is the dropped byte: for a locked frame, the one right
+    /// after it (a locked frame is held only while `buf` starts right after it). A locked frame that continues the
+    /// frame before it and shows no sign of a lost byte is released; any other held frame is dropped. A frame that
+    /// lost a byte and passed the checksum with the next frame's 0x20 ends in 0x20 and is followed by that frame's
+    /// second sync byte: the next sync pair one byte early.
+    #[cold]
+    fn garbage_after_held(&mut self, first: u8) -> Option<Decoded> {
+        match core::mem::replace(&mut self.held, Held::None) {
+            Held::AwaitSync(raw, end)
+                if self.held_continues && !(raw[FRAME_LEN - 1] == SYNC0 && is_sync1(first)) =>
+            {
+                self.emit(raw, end)
+            }
+            _ => {
+                self.stats.bytes_skipped += FRAME_LEN as u64;
+                None
+            }
         }
     }
 
@@ -310,13 +370,24 @@ impl StreamDecoder {
     }
 }
 
-/// Whether frame `b`, received directly after `a`, is what the pen sends after `a` (see the module docs).
-fn continues(a: &[u8; FRAME_LEN], b: &[u8; FRAME_LEN]) -> bool {
-    let sensor = |f: &[u8; FRAME_LEN]| f[1] == crate::sensor::SENSOR_SYNC1;
-    match (sensor(a), sensor(b)) {
-        (true, true) => b[2] == a[2].wrapping_add(1),
-        (true, false) => b[3] == a[2],
-        (false, true) => b[2] == a[3].wrapping_add(1),
-        (false, false) => b[2] == a[2].wrapping_add(1),
+/// The bytes of a frame that continuation looks at: kind (byte 1), counter or sequence (2), sensor counter (3).
+#[derive(Clone, Copy)]
+struct Header([u8; 3]);
+
+impl Header {
+    fn of(raw: &[u8; FRAME_LEN]) -> Header {
+        Header([raw[1], raw[2], raw[3]])
+    }
+
+    /// Whether frame `b`, received directly after this one, is what the pen sends next (see the module docs).
+    #[inline]
+    fn continued_by(self, b: &[u8; FRAME_LEN]) -> bool {
+        let [kind, count, sensor_count] = self.0;
+        match (kind == SENSOR_SYNC1, b[1] == SENSOR_SYNC1) {
+            (true, true) => b[2] == count.wrapping_add(1),
+            (true, false) => b[3] == count,
+            (false, true) => b[2] == sensor_count.wrapping_add(1),
+            (false, false) => b[2] == count.wrapping_add(1),
+        }
     }
 }

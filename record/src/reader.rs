@@ -41,8 +41,17 @@ fn read_file(path: &Path) -> Result<Vec<u8>, RecordError> {
 }
 
 fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, RecordError> {
-    let bytes = read_file(path)?;
-    serde_json::from_slice(&bytes).map_err(|e| RecordError::Json {
+    parse_json(&read_file(path)?, path)
+}
+
+fn read_jsonl<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>, RecordError> {
+    parse_jsonl(&read_file(path)?, path)
+}
+
+/// Parses a whole-file JSON document (`meta.json`, `truth/strokes.json`, `truth/world.json`); `path` names the
+/// source in errors.
+pub fn parse_json<T: DeserializeOwned>(bytes: &[u8], path: &Path) -> Result<T, RecordError> {
+    serde_json::from_slice(bytes).map_err(|e| RecordError::Json {
         path: path.to_path_buf(),
         line: e.line(),
         cause: e,
@@ -53,8 +62,9 @@ fn plain_image_name(name: &str) -> bool {
     !name.is_empty() && !name.contains(['/', '\\']) && name != "." && name != ".."
 }
 
-fn read_jsonl<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>, RecordError> {
-    let bytes = read_file(path)?;
+/// Parses a JSON-lines file (one value per line, blank lines ignored: `frames.jsonl`, `truth/*.jsonl`); `path`
+/// names the source in errors.
+pub fn parse_jsonl<T: DeserializeOwned>(bytes: &[u8], path: &Path) -> Result<Vec<T>, RecordError> {
     let mut out = Vec::new();
     for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
         if line.iter().all(u8::is_ascii_whitespace) {
@@ -68,6 +78,36 @@ fn read_jsonl<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>, RecordError> {
         out.push(v);
     }
     Ok(out)
+}
+
+/// Parses `meta.json` bytes, checks the format name and major version and validates the calibration and pen
+/// (docs/recording.md, "Validation"); `path` names the source in errors.
+pub fn parse_meta(bytes: &[u8], path: &Path) -> Result<Meta, RecordError> {
+    let meta: Meta = parse_json(bytes, path)?;
+    check_version(&meta, path)?;
+    meta.validate().map_err(|e| RecordError::InvalidMeta {
+        path: path.to_path_buf(),
+        problem: e,
+    })?;
+    Ok(meta)
+}
+
+/// Parses a camera's `frames.jsonl` bytes and checks that every image name is a plain file name; `path` names
+/// the source in errors.
+pub fn parse_frames(bytes: &[u8], path: &Path) -> Result<Vec<CameraFrame>, RecordError> {
+    let frames: Vec<CameraFrame> = parse_jsonl(bytes, path)?;
+    for (i, f) in frames.iter().enumerate() {
+        if let Some(name) = &f.image {
+            if !plain_image_name(name) {
+                return Err(RecordError::BadImageName {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    name: name.clone(),
+                });
+            }
+        }
+    }
+    Ok(frames)
 }
 
 /// Parses `link.bin` bytes strictly: the first record that is not whole is an error; `path` names the source.
@@ -129,12 +169,7 @@ impl RecordingReader {
     /// the calibration and pen geometry ([`Meta::validate`]); every later read fails on any damage.
     pub fn open(dir: &Path) -> Result<Self, RecordError> {
         let path = dir.join("meta.json");
-        let meta: Meta = read_json(&path)?;
-        check_version(&meta, &path)?;
-        meta.validate().map_err(|e| RecordError::InvalidMeta {
-            path: path.clone(),
-            problem: e,
-        })?;
+        let meta = parse_meta(&read_file(&path)?, &path)?;
         Ok(RecordingReader {
             dir: dir.to_path_buf(),
             meta,
@@ -261,19 +296,7 @@ impl RecordingReader {
             return Ok(self.jsonl(&rel, check)?.unwrap_or_default());
         }
         let path = self.dir.join(&rel);
-        let frames: Vec<CameraFrame> = read_jsonl(&path)?;
-        for (i, f) in frames.iter().enumerate() {
-            if let Some(name) = &f.image {
-                if !plain_image_name(name) {
-                    return Err(RecordError::BadImageName {
-                        path,
-                        line: i + 1,
-                        name: name.clone(),
-                    });
-                }
-            }
-        }
-        Ok(frames)
+        parse_frames(&read_file(&path)?, &path)
     }
 
     /// Reads the image of a frame (`None` if the frame has no image); a missing or bad image is an error, also
