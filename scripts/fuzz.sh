@@ -17,6 +17,7 @@ TARGETS=(
   "protocol/fuzz stream_decoder samples protocol/tests/data/fuzz/stream_decoder"
   "protocol/fuzz command_parser protocol/tests/data/fuzz/command_parser"
   "record/fuzz read_recording record/tests/data/fuzz/read_recording"
+  "record/fuzz read_strokes record/tests/data/fuzz/read_strokes"
   "recon/fuzz read_obj recon/tests/data recon/tests/data/fuzz/read_obj"
   "recon/fuzz read_off recon/tests/data recon/tests/data/fuzz/read_off"
   "recon/fuzz read_ply recon/tests/data recon/tests/data/fuzz/read_ply"

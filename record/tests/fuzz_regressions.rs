@@ -61,3 +61,29 @@ fn fuzz_inputs_parse_or_fail_with_a_typed_error() {
     // One seed per stream the reader parses.
     assert_eq!(seeds.len(), 9, "seeds cover {seeds:?}");
 }
+
+/// The `read_strokes` target's inputs: an even first byte is a strokes file, an odd one a report; `seed-*`
+/// files must read, any other file is an input that once crashed a reader and must now give a typed error.
+#[test]
+fn strokes_and_report_fuzz_inputs_read_or_fail_with_a_typed_error() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz/read_strokes");
+    let mut seeds = 0;
+    for entry in std::fs::read_dir(&dir).expect("test data directory") {
+        let f = entry.expect("directory entry").path();
+        let data = std::fs::read(&f).expect("readable test input");
+        let Some((&which, bytes)) = data.split_first() else {
+            continue;
+        };
+        let ok = if which % 2 == 0 {
+            fires_record::StrokesFile::from_json(bytes).is_ok()
+        } else {
+            fires_record::Report::from_json(bytes).is_ok()
+        };
+        let name = f.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        if name.starts_with("seed-") {
+            assert!(ok, "{name} must read");
+            seeds += 1;
+        }
+    }
+    assert!(seeds >= 1, "a seed strokes file");
+}
