@@ -1,0 +1,28 @@
+//! The curve network: the FIRES thesis's polyline mesh (§3.3) and the sketching tools that build it
+//! (ch. 5), each a transaction.
+//!
+//! * [`Network`]: vertices, polylines, edges, faces with stable handles, [`Network::validate`] and
+//!   [`Network::topology`] (Euler bookkeeping);
+//! * [`tools`]: initial boundary and curve insertion (with vertex snapping, overshoot trimming and
+//!   short-stop extension);
+//! * [`build_network`]: strokes in, network out;
+//! * [`NetworkFile`]: `network.json` (docs/network.md).
+
+mod build;
+mod file;
+pub(crate) mod geom;
+mod handles;
+mod mesh;
+mod ops;
+mod topology;
+pub mod tools;
+mod txn;
+mod validate;
+
+pub use build::{build_network, BuildOptions, BuildReport, Rejected, StrokeInput};
+pub use file::{NetworkFile, NetworkFileError, NETWORK_FORMAT, NETWORK_VERSION};
+pub use handles::{EdgeId, FaceId, PolylineId, VertexId};
+pub use mesh::{Edge, EdgeUse, Face, Fit, Network, Origin, Polyline, PolylineAttrs, Vertex};
+pub use topology::Topology;
+pub use txn::Transaction;
+pub use validate::{InvariantError, ENDPOINT_TOLERANCE_M};
