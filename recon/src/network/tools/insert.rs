@@ -106,6 +106,7 @@ struct Ctx<'a> {
     thr: f64,
     snap: f64,
     over: f64,
+    report: f64,
 }
 
 /// Inserts `curve` into the network (see the module docs for the rules).
@@ -139,6 +140,7 @@ pub fn insert_curve(
         thr,
         snap,
         over: options.overshoot_mm * 1e-3,
+        report: options.intersect_mm * 1e-3,
     };
     let mut adjustments = Vec::new();
     let (start, adj) = ctx.resolve_end(End::Start)?;
@@ -152,15 +154,15 @@ pub fn insert_curve(
         }
     }
     stops.push(end);
-    let snapped = stops
-        .iter()
-        .filter(|s| matches!(s.anchor, Anchor::Vertex(_)))
-        .count();
     // Consecutive stops on one vertex are one stop.
     stops.dedup_by(|b, a| match (a.anchor, b.anchor) {
         (Anchor::Vertex(x), Anchor::Vertex(y)) => x == y,
         _ => false,
     });
+    let snapped = stops
+        .iter()
+        .filter(|s| matches!(s.anchor, Anchor::Vertex(_)))
+        .count();
     if stops.len() < 2 {
         return Err(ToolError::BadCurve("the curve meets the network at one point only".into()));
     }
@@ -224,12 +226,23 @@ impl Ctx<'_> {
             End::Start => self.hits.first(),
             End::End => self.hits.last(),
         };
+        // Adjustments shorter than the (unwidened) intersection threshold are ordinary drawing and not
+        // reported.
         let trimmed = |h: &Hit| {
             let along = self.along(end, h);
-            let adj = (along > self.thr).then_some(Adjustment::Trimmed {
-                end,
-                length_mm: along * 1e3,
-            });
+            let adj = if along > self.report {
+                Some(Adjustment::Trimmed {
+                    end,
+                    length_mm: along * 1e3,
+                })
+            } else if along <= SAME_POINT_M && h.distance > self.report {
+                Some(Adjustment::Extended {
+                    end,
+                    gap_mm: h.distance * 1e3,
+                })
+            } else {
+                None
+            };
             (self.stop_of(h, h.sigma), adj)
         };
         if let Some(near) = nearest_point(self.net, p, self.snap) {
