@@ -82,3 +82,69 @@ pub fn chord_crossing(a: (f64, f64), b: (f64, f64)) -> Option<[f64; 2]> {
     let u = (w[0] * d1[1] - w[1] * d1[0]) / den;
     ((0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u)).then(|| [p[0] + t * d1[0], p[1] + t * d1[1]])
 }
+
+/// Random chords of the disc, kept only where the network they make is unambiguous for the default
+/// thresholds: every crossing at least `gap` from every other crossing and every chord end, ends at
+/// least `gap` apart and from the boundary's split points (0°, 180°), crossing angles ≥ 25°.
+/// Returns the chords as boundary-angle pairs.
+pub fn separated_chords(rng: &mut Rng, n: usize, gap: f64) -> Vec<(f64, f64)> {
+    let mut chords: Vec<(f64, f64)> = Vec::new();
+    let mut tries = 0;
+    while chords.len() < n && tries < 100_000 {
+        tries += 1;
+        let a0 = rng.range(0.0, 2.0 * PI);
+        let a1 = a0 + rng.range(0.6, 2.0 * PI - 0.6);
+        let c = (a0, a1);
+        let mut ends = vec![at(0.0), at(PI)];
+        let mut points: Vec<[f64; 2]> = Vec::new();
+        for &d in &chords {
+            ends.push(at(d.0));
+            ends.push(at(d.1));
+        }
+        let far = |p: [f64; 2], q: [f64; 3]| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt() >= gap;
+        let mine = [at(a0), at(a1)];
+        if !mine.iter().all(|m| ends.iter().all(|e| far([m[0], m[1]], *e))) {
+            continue;
+        }
+        let mut ok = true;
+        for (k, &d) in chords.iter().enumerate() {
+            if let Some(x) = chord_crossing(c, d) {
+                let dir = |c: (f64, f64)| {
+                    let (p, q) = (at(c.0), at(c.1));
+                    let l = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
+                    [(q[0] - p[0]) / l, (q[1] - p[1]) / l]
+                };
+                let (u, v) = (dir(c), dir(d));
+                let sin = (u[0] * v[1] - u[1] * v[0]).abs();
+                if sin < 25f64.to_radians().sin() || !ends.iter().chain(&mine).all(|e| far(x, *e)) {
+                    ok = false;
+                    break;
+                }
+                points.push(x);
+            }
+            // Earlier crossings of the other chords.
+            for &e in chords.iter().take(k) {
+                if let Some(y) = chord_crossing(chords[k], e) {
+                    if points.iter().any(|p| !far(*p, [y[0], y[1], Z])) {
+                        ok = false;
+                    }
+                }
+            }
+            if !ok {
+                break;
+            }
+        }
+        // Crossings of this chord among themselves.
+        for i in 0..points.len() {
+            for j in 0..i {
+                if !far(points[i], [points[j][0], points[j][1], Z]) {
+                    ok = false;
+                }
+            }
+        }
+        if ok {
+            chords.push(c);
+        }
+    }
+    chords
+}
