@@ -214,6 +214,7 @@ impl NetworkFile {
         if !ok {
             return Err(NetworkFileError::BadId("a reference is out of range".into()));
         }
+        net.rebuild_boxes();
         net.validate()?;
         Ok(net)
     }

@@ -120,6 +120,8 @@ pub struct Network {
     pub(crate) faces: Vec<Option<Face>>,
     /// The open transaction's change log (`None` outside a transaction).
     pub(crate) log: Option<super::txn::Log>,
+    /// Bounding box of each polyline slot (derived; empty slots hold an empty box).
+    pub(crate) boxes: Vec<([f64; 3], [f64; 3])>,
 }
 
 impl PartialEq for Network {
@@ -151,6 +153,7 @@ macro_rules! arena_access {
         }
         pub(crate) fn $set(&mut self, id: $id, value: Option<$ty>) {
             let old = std::mem::replace(&mut self.$field[id.idx()], value);
+            self.slot_written(Change::$change(id, None));
             if let Some(log) = &mut self.log {
                 log.changes.push(Change::$change(id, old));
             }
@@ -184,6 +187,34 @@ impl Network {
         Polyline,
         Polyline
     );
+
+    /// Keeps the derived polyline boxes in step with a slot write.
+    pub(crate) fn slot_written(&mut self, c: Change) {
+        if let Change::Polyline(id, _) = c {
+            let b = match &self.polylines[id.idx()] {
+                Some(p) => super::geom::bbox(&p.points),
+                None => super::geom::bbox(&[]),
+            };
+            if self.boxes.len() < self.polylines.len() {
+                self.boxes.resize(self.polylines.len(), super::geom::bbox(&[]));
+            }
+            self.boxes[id.idx()] = b;
+        }
+    }
+
+    /// Recomputes every polyline box (after slots were written directly).
+    pub(crate) fn rebuild_boxes(&mut self) {
+        self.boxes = self
+            .polylines
+            .iter()
+            .map(|p| super::geom::bbox(p.as_ref().map_or(&[][..], |p| &p.points[..])))
+            .collect();
+    }
+
+    /// The bounding box of polyline `p`.
+    pub(crate) fn polyline_box(&self, p: super::handles::PolylineId) -> ([f64; 3], [f64; 3]) {
+        self.boxes.get(p.idx()).copied().unwrap_or_else(|| super::geom::bbox(&[]))
+    }
 
     /// The polyline of edge `e`.
     pub fn edge_polyline(&self, e: EdgeId) -> Option<&Polyline> {

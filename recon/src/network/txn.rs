@@ -49,6 +49,7 @@ impl Network {
         self.edges.resize(lens[1], None);
         self.faces.resize(lens[2], None);
         self.polylines.resize(lens[3], None);
+        self.boxes.truncate(lens[3]);
     }
 
     fn write_raw(&mut self, c: Change) {
@@ -56,7 +57,10 @@ impl Network {
             Change::Vertex(id, v) => self.vertices[id.idx()] = v,
             Change::Edge(id, v) => self.edges[id.idx()] = v,
             Change::Face(id, v) => self.faces[id.idx()] = v,
-            Change::Polyline(id, v) => self.polylines[id.idx()] = v,
+            Change::Polyline(id, v) => {
+                self.polylines[id.idx()] = v;
+                self.slot_written(Change::Polyline(id, None));
+            }
         }
     }
 

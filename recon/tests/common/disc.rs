@@ -148,3 +148,45 @@ pub fn separated_chords(rng: &mut Rng, n: usize, gap: f64) -> Vec<(f64, f64)> {
     }
     chords
 }
+
+/// A grid drawing on a circle of radius `radius` centred at the origin (z = Z): the boundary circle,
+/// `n` horizontal and `n` vertical lines `spacing` apart (centred), then `cells` short strokes, each
+/// cutting the top-left corner off one grid cell (from its left side's midpoint to its top side's
+/// midpoint). All lines are sampled every `step` metres. Returns the strokes (boundary first) and the
+/// number of line crossings.
+pub fn grid_drawing(
+    radius: f64,
+    n: usize,
+    spacing: f64,
+    cells: usize,
+    step: f64,
+) -> (Vec<(Vec<[f64; 3]>, bool)>, usize) {
+    let m = (2.0 * PI * radius / step).ceil() as usize;
+    let mut out = vec![((0..=m)
+        .map(|i| {
+            let a = 2.0 * PI * i as f64 / m as f64 + 0.1;
+            [radius * a.cos(), radius * a.sin(), Z]
+        })
+        .collect(), true)];
+    let c: Vec<f64> = (0..n).map(|k| (k as f64 - (n as f64 - 1.0) / 2.0) * spacing).collect();
+    for &y in &c {
+        let x = (radius * radius - y * y).sqrt();
+        out.push((line([-x, y, Z], [x, y, Z], step), false));
+    }
+    for &x in &c {
+        let y = (radius * radius - x * x).sqrt();
+        out.push((line([x, y, Z], [x, -y, Z], step), false));
+    }
+    let mut k = 0;
+    'cells: for i in 0..n.saturating_sub(1) {
+        for j in 0..n.saturating_sub(1) {
+            if k == cells {
+                break 'cells;
+            }
+            let (x, y) = (c[i], c[j]);
+            out.push((line([x, y + 0.5 * spacing, Z], [x + 0.5 * spacing, y + spacing, Z], step.min(0.002)), false));
+            k += 1;
+        }
+    }
+    (out, n * n)
+}

@@ -80,7 +80,7 @@ pub(crate) fn find_hits(net: &Network, curve: &[P3], arc: &[f64], threshold: f64
         let Some(poly) = net.polyline(ed.polyline) else {
             continue;
         };
-        if !boxes_overlap(curve_box, bbox(&poly.points), threshold) {
+        if !boxes_overlap(curve_box, net.polyline_box(ed.polyline), threshold) {
             continue;
         }
         // (sigma, seg, t, point, distance) of every close segment pair.
@@ -143,11 +143,14 @@ pub(crate) fn nearest_point(net: &Network, p: P3, radius: f64) -> Option<Hit> {
         let Some(poly) = net.polyline(ed.polyline) else {
             continue;
         };
-        if !boxes_overlap(pbox, bbox(&poly.points), radius) {
+        if !boxes_overlap(pbox, net.polyline_box(ed.polyline), radius) {
             continue;
         }
         for j in 0..poly.points.len() - 1 {
             let (q0, q1) = (poly.points[j], poly.points[j + 1]);
+            if !boxes_overlap(pbox, bbox(&[q0, q1]), radius) {
+                continue;
+            }
             let (_, t, d) = segment_segment(p, p, q0, q1);
             if d <= radius && best.is_none_or(|b| d < b.distance) {
                 best = Some(Hit {
