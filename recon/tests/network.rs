@@ -5,7 +5,8 @@ mod common;
 
 use common::disc::{chord, circle, vertical, Rng, Z};
 use fires_recon::network::tools::{
-    insert_boundary, insert_curve, Adjustment, BoundaryOptions, CurveInput, End, InsertOptions, ToolError,
+    insert_boundary, insert_curve, Adjustment, BoundaryOptions, CurveInput, End, InsertOptions,
+    ToolError,
 };
 use fires_recon::network::{Network, NetworkFile, NetworkFileError};
 use std::f64::consts::PI;
@@ -18,7 +19,10 @@ fn disc() -> Network {
     net
 }
 
-fn insert(net: &mut Network, pts: &[[f64; 3]]) -> Result<fires_recon::network::tools::InsertReport, ToolError> {
+fn insert(
+    net: &mut Network,
+    pts: &[[f64; 3]],
+) -> Result<fires_recon::network::tools::InsertReport, ToolError> {
     let before = net.clone();
     let before_json = NetworkFile::to_json(net);
     let r = insert_curve(net, CurveInput::new(pts), &InsertOptions::default());
@@ -37,11 +41,20 @@ fn boundary_is_one_face_of_two_edges_split_at_the_diameter() {
     assert_eq!((t.vertices, t.edges, t.faces), (2, 2, 1));
     assert_eq!((t.boundaries, t.components, t.euler, t.genus), (1, 1, 1, 0));
     let p: Vec<[f64; 3]> = net.vertices().map(|(_, v)| v.position).collect();
-    assert_eq!(p, vec![[0.1, 0.0, Z], [-0.1, 0.097 * PI.sin(), Z]], "split at the ellipse's major axis");
+    assert_eq!(
+        p,
+        vec![[0.1, 0.0, Z], [-0.1, 0.097 * PI.sin(), Z]],
+        "split at the ellipse's major axis"
+    );
     // An open curve is not a boundary.
     let mut net = Network::new();
     let open = chord(0.0, PI, 0.0);
-    let e = insert_boundary(&mut net, CurveInput::new(&open), &BoundaryOptions::default()).unwrap_err();
+    let e = insert_boundary(
+        &mut net,
+        CurveInput::new(&open),
+        &BoundaryOptions::default(),
+    )
+    .unwrap_err();
     assert!(matches!(e, ToolError::NotClosed { gap_mm, .. } if (gap_mm - 200.0).abs() < 1e-6));
     assert_eq!(net, Network::new());
 }
@@ -56,13 +69,21 @@ fn insertion_across_m_edges_gives_the_thesis_deltas() {
             insert(&mut net, &vertical(x)).unwrap();
             let after = net.topology();
             assert_eq!(
-                (after.vertices - before.vertices, after.edges - before.edges, after.faces - before.faces),
+                (
+                    after.vertices - before.vertices,
+                    after.edges - before.edges,
+                    after.faces - before.faces
+                ),
                 (2, 3, 1)
             );
         }
         // A chord from 160° to -20° crosses all m verticals.
         let before = net.topology();
-        let r = insert(&mut net, &chord(160f64.to_radians(), -20f64.to_radians(), 0.0)).unwrap();
+        let r = insert(
+            &mut net,
+            &chord(160f64.to_radians(), -20f64.to_radians(), 0.0),
+        )
+        .unwrap();
         let after = net.topology();
         assert_eq!(r.crossings, m);
         assert_eq!(r.snapped, 0);
@@ -81,12 +102,20 @@ fn insertion_across_m_edges_gives_the_thesis_deltas() {
 fn rule_one_same_polyline_is_refused_unchanged() {
     let mut net = disc();
     // Both ends on the top arc (the boundary is split at 0° and 180°), crossing nothing.
-    let e = insert(&mut net, &chord(30f64.to_radians(), 150f64.to_radians(), 0.0)).unwrap_err();
+    let e = insert(
+        &mut net,
+        &chord(30f64.to_radians(), 150f64.to_radians(), 0.0),
+    )
+    .unwrap_err();
     assert!(matches!(e, ToolError::SamePolyline { .. }), "{e}");
     assert_eq!(e.rule(), "rule 1: not on the same polyline");
     // Once a vertical chord separates them the same stroke is fine: it crosses it once.
     insert(&mut net, &vertical(0.0)).unwrap();
-    let r = insert(&mut net, &chord(30f64.to_radians(), 150f64.to_radians(), 0.0)).unwrap();
+    let r = insert(
+        &mut net,
+        &chord(30f64.to_radians(), 150f64.to_radians(), 0.0),
+    )
+    .unwrap();
     assert_eq!(r.crossings, 1);
     assert_eq!(net.topology().faces, 4);
 }
@@ -113,7 +142,11 @@ fn rule_two_a_crossing_without_intersection_is_refused_unchanged() {
 #[test]
 fn ends_off_the_network_are_refused_with_the_distance() {
     let mut net = disc();
-    let e = insert(&mut net, &chord(80f64.to_radians(), -80f64.to_radians(), -0.02)).unwrap_err();
+    let e = insert(
+        &mut net,
+        &chord(80f64.to_radians(), -80f64.to_radians(), -0.02),
+    )
+    .unwrap_err();
     match e {
         ToolError::EndNotOnNetwork {
             end: End::Start,
@@ -135,7 +168,10 @@ fn overshoot_is_trimmed_and_short_stop_extended() {
     let r = insert(&mut net, &chord(a0, a1, 0.015)).unwrap();
     assert_eq!(r.adjustments.len(), 2);
     for a in &r.adjustments {
-        assert!(matches!(a, Adjustment::Trimmed { length_mm, .. } if (length_mm - 15.0).abs() < 0.01), "{a:?}");
+        assert!(
+            matches!(a, Adjustment::Trimmed { length_mm, .. } if (length_mm - 15.0).abs() < 0.01),
+            "{a:?}"
+        );
     }
     let exact = {
         let mut n = disc();
@@ -147,7 +183,10 @@ fn overshoot_is_trimmed_and_short_stop_extended() {
     let r = insert(&mut net, &chord(a0, a1, -0.006)).unwrap();
     assert_eq!(r.adjustments.len(), 2);
     for a in &r.adjustments {
-        assert!(matches!(a, Adjustment::Extended { gap_mm, .. } if (gap_mm - 6.0).abs() < 0.2), "{a:?}");
+        assert!(
+            matches!(a, Adjustment::Extended { gap_mm, .. } if (gap_mm - 6.0).abs() < 0.2),
+            "{a:?}"
+        );
     }
     assert_eq!(net.topology(), exact.topology());
     // The extended polyline ends on the boundary exactly (validate checks 1e-12) and starts there.
@@ -162,7 +201,10 @@ fn overshoot_is_trimmed_and_short_stop_extended() {
 fn thresholds_widen_with_the_stroke_uncertainty() {
     let c = chord(70f64.to_radians(), -110f64.to_radians(), -0.012);
     let mut net = disc();
-    assert!(matches!(insert(&mut net, &c), Err(ToolError::EndNotOnNetwork { .. })));
+    assert!(matches!(
+        insert(&mut net, &c),
+        Err(ToolError::EndNotOnNetwork { .. })
+    ));
     let curve = CurveInput {
         points: &c,
         stroke: Some(7),
@@ -171,18 +213,33 @@ fn thresholds_widen_with_the_stroke_uncertainty() {
     let (r, _) = insert_curve(&mut net, curve, &InsertOptions::default()).unwrap();
     net.validate().unwrap();
     assert!(matches!(r.adjustments[0], Adjustment::Extended { .. }));
-    assert!(r.edges.iter().all(|&e| net.edge_polyline(e).unwrap().attrs.stroke == Some(7)));
+    assert!(r
+        .edges
+        .iter()
+        .all(|&e| net.edge_polyline(e).unwrap().attrs.stroke == Some(7)));
 }
 
 #[test]
 fn a_curve_through_a_vertex_snaps_to_it() {
     let mut net = disc();
-    insert(&mut net, &chord(60f64.to_radians(), 240f64.to_radians(), 0.0)).unwrap();
-    insert(&mut net, &chord(120f64.to_radians(), 300f64.to_radians(), 0.0)).unwrap();
+    insert(
+        &mut net,
+        &chord(60f64.to_radians(), 240f64.to_radians(), 0.0),
+    )
+    .unwrap();
+    insert(
+        &mut net,
+        &chord(120f64.to_radians(), 300f64.to_radians(), 0.0),
+    )
+    .unwrap();
     assert_eq!(net.topology().faces, 4);
     let before = net.topology();
     // Through the centre, where the two chords cross.
-    let r = insert(&mut net, &chord(88.8f64.to_radians(), 268.8f64.to_radians(), 0.0)).unwrap();
+    let r = insert(
+        &mut net,
+        &chord(88.8f64.to_radians(), 268.8f64.to_radians(), 0.0),
+    )
+    .unwrap();
     let after = net.topology();
     assert_eq!(r.snapped, 1);
     assert_eq!(r.vertices.len(), 3);
@@ -196,8 +253,13 @@ fn undo_and_redo_restore_every_state_bit_for_bit() {
     let mut net = disc();
     let mut states = vec![net.clone()];
     let mut txns = Vec::new();
-    for c in [vertical(0.0), chord(160f64.to_radians(), -20f64.to_radians(), 0.0), vertical(0.05)] {
-        let (_, t) = insert_curve(&mut net, CurveInput::new(&c), &InsertOptions::default()).unwrap();
+    for c in [
+        vertical(0.0),
+        chord(160f64.to_radians(), -20f64.to_radians(), 0.0),
+        vertical(0.05),
+    ] {
+        let (_, t) =
+            insert_curve(&mut net, CurveInput::new(&c), &InsertOptions::default()).unwrap();
         txns.push(t);
         states.push(net.clone());
     }
@@ -217,7 +279,11 @@ fn undo_and_redo_restore_every_state_bit_for_bit() {
 fn network_json_round_trips_and_is_checked() {
     let mut net = disc();
     insert(&mut net, &vertical(0.0)).unwrap();
-    insert(&mut net, &chord(160f64.to_radians(), -20f64.to_radians(), 0.0)).unwrap();
+    insert(
+        &mut net,
+        &chord(160f64.to_radians(), -20f64.to_radians(), 0.0),
+    )
+    .unwrap();
     let text = NetworkFile::to_json(&net);
     let back = NetworkFile::parse(&text).unwrap();
     assert_eq!(back, net);
@@ -225,14 +291,20 @@ fn network_json_round_trips_and_is_checked() {
     // A polyline end moved by 1 µm breaks invariant 2.
     let mut file: NetworkFile = serde_json::from_str(&text).unwrap();
     file.polylines[0].points[0][0] += 1e-6;
-    assert!(matches!(file.to_network(), Err(NetworkFileError::Invalid(_))));
+    assert!(matches!(
+        file.to_network(),
+        Err(NetworkFileError::Invalid(_))
+    ));
     // A dangling vertex breaks invariant 3; a wrong format is refused.
     let mut file: NetworkFile = serde_json::from_str(&text).unwrap();
     file.vertices[0].edges.pop();
     assert!(file.to_network().is_err());
     let mut file: NetworkFile = serde_json::from_str(&text).unwrap();
     file.format = "x".into();
-    assert!(matches!(file.to_network(), Err(NetworkFileError::NotANetworkFile(_))));
+    assert!(matches!(
+        file.to_network(),
+        Err(NetworkFileError::NotANetworkFile(_))
+    ));
 }
 
 #[test]
@@ -247,8 +319,16 @@ fn random_tool_sequences_keep_the_invariants() {
             let extra = rng.range(-0.012, 0.02);
             let mut c = chord(a0, a1, extra);
             // Sometimes bend or lift the curve, sometimes add noise.
-            let bend = if rng.unit() < 0.3 { rng.range(-0.02, 0.02) } else { 0.0 };
-            let lift = if rng.unit() < 0.2 { rng.range(0.0, 0.02) } else { 0.0 };
+            let bend = if rng.unit() < 0.3 {
+                rng.range(-0.02, 0.02)
+            } else {
+                0.0
+            };
+            let lift = if rng.unit() < 0.2 {
+                rng.range(0.0, 0.02)
+            } else {
+                0.0
+            };
             let n = c.len();
             for (i, p) in c.iter_mut().enumerate() {
                 let s = (PI * i as f64 / (n - 1).max(1) as f64).sin();

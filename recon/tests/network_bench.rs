@@ -9,7 +9,7 @@ use common::disc::grid_drawing;
 use fires_recon::network::tools::{insert_curve, CurveInput, InsertOptions};
 use fires_recon::network::{build_network, BuildOptions, Network, StrokeInput};
 
-fn strokes(drawing: Vec<(Vec<[f64; 3]>, bool)>) -> Vec<StrokeInput> {
+fn strokes(drawing: Vec<common::disc::Drawn>) -> Vec<StrokeInput> {
     drawing
         .into_iter()
         .enumerate()

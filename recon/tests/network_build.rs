@@ -28,14 +28,21 @@ fn disc_with_crossing_chords_has_the_faces_topology_implies() {
             order.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
         }
         for (k, &i) in order.iter().enumerate() {
-            strokes.push(stroke(k as u32 + 1, chord(chords[i].0, chords[i].1, 0.0), false));
+            strokes.push(stroke(
+                k as u32 + 1,
+                chord(chords[i].0, chords[i].1, 0.0),
+                false,
+            ));
         }
         let (net, report) = build_network(&strokes, &BuildOptions::default());
         net.validate().unwrap();
         // Rule 1 can leave a chord unusable for good (both ends on one boundary edge, no crossing);
         // anything else is a defect.
         for r in &report.rejected {
-            assert_eq!(r.rule, "rule 1: not on the same polyline", "seed {seed}: {r:?}");
+            assert_eq!(
+                r.rule, "rule 1: not on the same polyline",
+                "seed {seed}: {r:?}"
+            );
         }
         let used: Vec<(f64, f64)> = report
             .used
@@ -50,14 +57,26 @@ fn disc_with_crossing_chords_has_the_faces_topology_implies() {
             }
         }
         let t = report.topology;
-        assert_eq!(t.faces, 1 + used.len() + crossings, "seed {seed}: 1 + Σ(crossings + 1)");
+        assert_eq!(
+            t.faces,
+            1 + used.len() + crossings,
+            "seed {seed}: 1 + Σ(crossings + 1)"
+        );
         assert_eq!((t.euler, t.boundaries, t.genus), (1, 1, 0));
         // A refused chord crosses no used chord (a crossing would give it two polylines to end on).
         for r in &report.rejected {
             let c = chords[order[r.stroke as usize - 1]];
-            assert!(used.iter().all(|&u| chord_crossing(c, u).is_none()), "seed {seed}: {r:?}");
+            assert!(
+                used.iter().all(|&u| chord_crossing(c, u).is_none()),
+                "seed {seed}: {r:?}"
+            );
         }
-        assert!(used.len() * 2 >= chords.len(), "seed {seed}: used {} of {}", used.len(), chords.len());
+        assert!(
+            used.len() * 2 >= chords.len(),
+            "seed {seed}: used {} of {}",
+            used.len(),
+            chords.len()
+        );
         assert!(crossings >= 5, "seed {seed}: only {crossings} crossings");
         assert_eq!(report.boundary, Some(0));
     }
@@ -68,7 +87,11 @@ fn a_stroke_that_fits_only_later_is_retried() {
     // Chord B (30° → 150°) has both ends on the top arc; it fits once the vertical chord A exists.
     let b = chord(30f64.to_radians(), 150f64.to_radians(), 0.0);
     let a = chord(90f64.to_radians(), 270f64.to_radians(), 0.0);
-    let strokes = vec![stroke(0, circle(400), true), stroke(1, b, false), stroke(2, a, false)];
+    let strokes = vec![
+        stroke(0, circle(400), true),
+        stroke(1, b, false),
+        stroke(2, a, false),
+    ];
     let (net, report) = build_network(&strokes, &BuildOptions::default());
     net.validate().unwrap();
     assert_eq!(report.used, vec![0, 2, 1]);
@@ -82,7 +105,11 @@ fn unusable_strokes_are_reported_with_rule_and_distance() {
     let short = chord(80f64.to_radians(), 260f64.to_radians(), -0.03);
     let far = vec![[1.0, 1.0, 1.0], [1.1, 1.0, 1.0]];
     let strokes = vec![
-        stroke(3, chord(10f64.to_radians(), 100f64.to_radians(), 0.0), false),
+        stroke(
+            3,
+            chord(10f64.to_radians(), 100f64.to_radians(), 0.0),
+            false,
+        ),
         stroke(4, circle(400), true),
         stroke(5, short, false),
         stroke(6, far, false),
@@ -91,10 +118,18 @@ fn unusable_strokes_are_reported_with_rule_and_distance() {
     net.validate().unwrap();
     assert_eq!(report.boundary, Some(4));
     assert_eq!(report.used, vec![4]);
-    let rules: Vec<(u32, &str)> = report.rejected.iter().map(|r| (r.stroke, r.rule.as_str())).collect();
+    let rules: Vec<(u32, &str)> = report
+        .rejected
+        .iter()
+        .map(|r| (r.stroke, r.rule.as_str()))
+        .collect();
     assert_eq!(
         rules,
-        vec![(3, "rule 1: not on the same polyline"), (5, "ends on the network"), (6, "ends on the network")]
+        vec![
+            (3, "rule 1: not on the same polyline"),
+            (5, "ends on the network"),
+            (6, "ends on the network")
+        ]
     );
     let d5 = report.rejected[1].distance_mm.unwrap();
     assert!(d5 > 25.0 && d5 <= 30.0, "{d5}");

@@ -11,7 +11,8 @@ use serde::{Deserialize, Serialize};
 
 use super::mesh::Network;
 use super::tools::{
-    insert_boundary, insert_curve, Adjustment, BoundaryOptions, CurveInput, InsertOptions, ToolError,
+    insert_boundary, insert_curve, Adjustment, BoundaryOptions, CurveInput, InsertOptions,
+    ToolError,
 };
 use super::topology::Topology;
 
@@ -97,7 +98,9 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
         topology: net.topology(),
     };
     let boundary_options = BoundaryOptions {
-        close_mm: options.close_mm.unwrap_or(BoundaryOptions::default().close_mm),
+        close_mm: options
+            .close_mm
+            .unwrap_or(BoundaryOptions::default().close_mm),
     };
     let mut pending: Vec<(usize, Option<ToolError>)> = Vec::new();
     for (k, s) in strokes.iter().enumerate() {
@@ -125,7 +128,9 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
                 match insert_curve(&mut net, curve(s), &options.insert) {
                     Ok((r, _)) => {
                         report.used.push(s.id);
-                        report.adjustments.extend(r.adjustments.iter().map(|a| (s.id, *a)));
+                        report
+                            .adjustments
+                            .extend(r.adjustments.iter().map(|a| (s.id, *a)));
                         progress = true;
                         false
                     }
@@ -141,7 +146,9 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
         }
     }
     for (k, last) in pending {
-        let e = last.unwrap_or(ToolError::BadCurve("no closed stroke to bound the network".into()));
+        let e = last.unwrap_or(ToolError::BadCurve(
+            "no closed stroke to bound the network".into(),
+        ));
         report.rejected.push(rejected(strokes[k].id, &e));
     }
     report.rejected.sort_by_key(|r| r.stroke);

@@ -113,7 +113,12 @@ impl NetworkFile {
             format: NETWORK_FORMAT.into(),
             version: NETWORK_VERSION.into(),
             units: "m".into(),
-            slots: [net.vertices.len(), net.edges.len(), net.faces.len(), net.polylines.len()],
+            slots: [
+                net.vertices.len(),
+                net.edges.len(),
+                net.faces.len(),
+                net.polylines.len(),
+            ],
             topology: net.topology(),
             vertices: net
                 .vertices()
@@ -159,13 +164,20 @@ impl NetworkFile {
         if self.version.split('.').next() != Some("1") {
             return Err(NetworkFileError::UnsupportedVersion(self.version.clone()));
         }
-        fn place<T>(slots: &mut [Option<T>], id: usize, value: T, kind: &str) -> Result<(), NetworkFileError> {
+        fn place<T>(
+            slots: &mut [Option<T>],
+            id: usize,
+            value: T,
+            kind: &str,
+        ) -> Result<(), NetworkFileError> {
             match slots.get_mut(id) {
                 Some(s @ None) => {
                     *s = Some(value);
                     Ok(())
                 }
-                _ => Err(NetworkFileError::BadId(format!("{kind} id {id} is out of range or repeated"))),
+                _ => Err(NetworkFileError::BadId(format!(
+                    "{kind} id {id} is out of range or repeated"
+                ))),
             }
         }
         let mut net = Network::new();
@@ -203,16 +215,22 @@ impl NetworkFile {
             place(&mut net.faces, f.id.idx(), value, "face")?;
         }
         let in_range = |id: usize, n: usize| id < n;
-        let ok = net.vertices().all(|(_, v)| v.edges.iter().all(|e| in_range(e.idx(), self.slots[1])))
+        let ok = net
+            .vertices()
+            .all(|(_, v)| v.edges.iter().all(|e| in_range(e.idx(), self.slots[1])))
             && net.edges().all(|(_, e)| {
                 in_range(e.from.idx(), self.slots[0])
                     && in_range(e.to.idx(), self.slots[0])
                     && in_range(e.polyline.idx(), self.slots[3])
                     && e.faces.iter().all(|f| in_range(f.idx(), self.slots[2]))
             })
-            && net.faces().all(|(_, f)| f.uses.iter().all(|u| in_range(u.edge.idx(), self.slots[1])));
+            && net
+                .faces()
+                .all(|(_, f)| f.uses.iter().all(|u| in_range(u.edge.idx(), self.slots[1])));
         if !ok {
-            return Err(NetworkFileError::BadId("a reference is out of range".into()));
+            return Err(NetworkFileError::BadId(
+                "a reference is out of range".into(),
+            ));
         }
         net.rebuild_boxes();
         net.validate()?;

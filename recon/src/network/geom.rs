@@ -15,6 +15,11 @@ pub(crate) fn dist(a: P3, b: P3) -> f64 {
     dot(d, d).sqrt()
 }
 
+pub(crate) fn dist2(a: P3, b: P3) -> f64 {
+    let d = sub(a, b);
+    dot(d, d)
+}
+
 pub(crate) fn lerp(a: P3, b: P3, t: f64) -> P3 {
     [
         a[0] + t * (b[0] - a[0]),
@@ -97,4 +102,50 @@ pub(crate) fn bbox(points: &[P3]) -> (P3, P3) {
 /// Boxes overlap after growing the first by `margin`.
 pub(crate) fn boxes_overlap(a: (P3, P3), b: (P3, P3), margin: f64) -> bool {
     (0..3).all(|k| a.0[k] - margin <= b.1[k] && b.0[k] <= a.1[k] + margin)
+}
+
+/// Segments per chunk box of [`PolyBoxes`].
+pub(crate) const CHUNK: usize = 16;
+
+/// A polyline's bounding box and the boxes of its runs of [`CHUNK`] segments (a two-level hierarchy
+/// that lets a query skip most of a long polyline).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct PolyBoxes {
+    pub(crate) whole: (P3, P3),
+    pub(crate) chunks: Vec<(P3, P3)>,
+}
+
+impl PolyBoxes {
+    pub(crate) fn new(points: &[P3]) -> Self {
+        let chunks: Vec<(P3, P3)> = if points.len() < 2 {
+            Vec::new()
+        } else {
+            (0..points.len() - 1)
+                .step_by(CHUNK)
+                .map(|s| bbox(&points[s..(s + CHUNK + 1).min(points.len())]))
+                .collect()
+        };
+        let whole = chunks.iter().fold(bbox(&[]), |a, b| {
+            (
+                [a.0[0].min(b.0[0]), a.0[1].min(b.0[1]), a.0[2].min(b.0[2])],
+                [a.1[0].max(b.1[0]), a.1[1].max(b.1[1]), a.1[2].max(b.1[2])],
+            )
+        });
+        PolyBoxes { whole, chunks }
+    }
+
+    /// Segment indices (of a polyline with `n` points) in the chunks whose box meets `b` grown by `margin`.
+    pub(crate) fn segments_near(
+        &self,
+        b: (P3, P3),
+        margin: f64,
+        n: usize,
+    ) -> impl Iterator<Item = usize> + '_ {
+        let whole = boxes_overlap(b, self.whole, margin);
+        self.chunks
+            .iter()
+            .enumerate()
+            .filter(move |(_, c)| whole && boxes_overlap(b, **c, margin))
+            .flat_map(move |(k, _)| k * CHUNK..((k + 1) * CHUNK).min(n.saturating_sub(1)))
+    }
 }

@@ -120,8 +120,10 @@ pub struct Network {
     pub(crate) faces: Vec<Option<Face>>,
     /// The open transaction's change log (`None` outside a transaction).
     pub(crate) log: Option<super::txn::Log>,
-    /// Bounding box of each polyline slot (derived; empty slots hold an empty box).
-    pub(crate) boxes: Vec<([f64; 3], [f64; 3])>,
+    /// Bounding boxes of each polyline slot (derived; empty slots hold empty boxes).
+    pub(crate) boxes: Vec<super::geom::PolyBoxes>,
+    /// The edge last written with each polyline (derived; exact for live polylines).
+    pub(crate) owner: Vec<EdgeId>,
 }
 
 impl PartialEq for Network {
@@ -173,7 +175,17 @@ impl Network {
         Self::default()
     }
 
-    arena_access!(vertex, vertices, n_vertices, set_vertex, push_vertex, vertices, VertexId, Vertex, Vertex);
+    arena_access!(
+        vertex,
+        vertices,
+        n_vertices,
+        set_vertex,
+        push_vertex,
+        vertices,
+        VertexId,
+        Vertex,
+        Vertex
+    );
     arena_access!(edge, edges, n_edges, set_edge, push_edge, edges, EdgeId, Edge, Edge);
     arena_access!(face, faces, n_faces, set_face, push_face, faces, FaceId, Face, Face);
     arena_access!(
@@ -190,13 +202,24 @@ impl Network {
 
     /// Keeps the derived polyline boxes in step with a slot write.
     pub(crate) fn slot_written(&mut self, c: Change) {
+        if let Change::Edge(id, _) = c {
+            if let Some(e) = &self.edges[id.idx()] {
+                let p = e.polyline.idx();
+                if self.owner.len() <= p {
+                    self.owner.resize(p + 1, EdgeId(u32::MAX));
+                }
+                self.owner[p] = id;
+            }
+        }
         if let Change::Polyline(id, _) = c {
-            let b = match &self.polylines[id.idx()] {
-                Some(p) => super::geom::bbox(&p.points),
-                None => super::geom::bbox(&[]),
-            };
+            let b = super::geom::PolyBoxes::new(
+                self.polylines[id.idx()]
+                    .as_ref()
+                    .map_or(&[][..], |p| &p.points[..]),
+            );
             if self.boxes.len() < self.polylines.len() {
-                self.boxes.resize(self.polylines.len(), super::geom::bbox(&[]));
+                self.boxes
+                    .resize(self.polylines.len(), super::geom::PolyBoxes::default());
             }
             self.boxes[id.idx()] = b;
         }
@@ -207,13 +230,35 @@ impl Network {
         self.boxes = self
             .polylines
             .iter()
-            .map(|p| super::geom::bbox(p.as_ref().map_or(&[][..], |p| &p.points[..])))
+            .map(|p| super::geom::PolyBoxes::new(p.as_ref().map_or(&[][..], |p| &p.points[..])))
             .collect();
+        self.owner = vec![EdgeId(u32::MAX); self.polylines.len()];
+        for (i, e) in self.edges.iter().enumerate() {
+            if let Some(e) = e {
+                if let Some(o) = self.owner.get_mut(e.polyline.idx()) {
+                    *o = EdgeId(i as u32);
+                }
+            }
+        }
     }
 
-    /// The bounding box of polyline `p`.
-    pub(crate) fn polyline_box(&self, p: super::handles::PolylineId) -> ([f64; 3], [f64; 3]) {
-        self.boxes.get(p.idx()).copied().unwrap_or_else(|| super::geom::bbox(&[]))
+    /// Live edges whose polyline's box meets `b` grown by `margin`, with their polyline and boxes.
+    pub(crate) fn edges_near(
+        &self,
+        b: ([f64; 3], [f64; 3]),
+        margin: f64,
+    ) -> impl Iterator<Item = (EdgeId, &Polyline, &super::geom::PolyBoxes)> + '_ {
+        self.boxes.iter().enumerate().filter_map(move |(p, bx)| {
+            if !super::geom::boxes_overlap(b, bx.whole, margin) {
+                return None;
+            }
+            let e = *self.owner.get(p)?;
+            let ed = self.edge(e)?;
+            if ed.polyline.idx() != p {
+                return None;
+            }
+            Some((e, self.polylines[p].as_ref()?, bx))
+        })
     }
 
     /// The polyline of edge `e`.
@@ -275,7 +320,10 @@ impl Network {
         mut points: Vec<[f64; 3]>,
         attrs: PolylineAttrs,
     ) -> EdgeId {
-        let (pa, pb) = (self.vertices[from.idx()].as_ref(), self.vertices[to.idx()].as_ref());
+        let (pa, pb) = (
+            self.vertices[from.idx()].as_ref(),
+            self.vertices[to.idx()].as_ref(),
+        );
         if let (Some(a), Some(b), Some(first)) = (pa, pb, points.first_mut()) {
             *first = a.position;
             if let Some(last) = points.last_mut() {

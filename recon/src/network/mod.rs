@@ -14,8 +14,8 @@ pub(crate) mod geom;
 mod handles;
 mod mesh;
 mod ops;
-mod topology;
 pub mod tools;
+mod topology;
 mod txn;
 mod validate;
 

@@ -81,11 +81,23 @@ impl Network {
                 if u.edge != e {
                     uses.push(*u);
                 } else if u.reversed {
-                    uses.push(EdgeUse { edge: e2, reversed: true });
-                    uses.push(EdgeUse { edge: e1, reversed: true });
+                    uses.push(EdgeUse {
+                        edge: e2,
+                        reversed: true,
+                    });
+                    uses.push(EdgeUse {
+                        edge: e1,
+                        reversed: true,
+                    });
                 } else {
-                    uses.push(EdgeUse { edge: e1, reversed: false });
-                    uses.push(EdgeUse { edge: e2, reversed: false });
+                    uses.push(EdgeUse {
+                        edge: e1,
+                        reversed: false,
+                    });
+                    uses.push(EdgeUse {
+                        edge: e2,
+                        reversed: false,
+                    });
                 }
             }
             face.uses = uses;
@@ -134,8 +146,14 @@ impl Network {
         let mut loop2: Vec<EdgeUse> = (0..ba).map(|k| face.uses[(cut.j + k) % n]).collect();
         let e = self.add_edge(a, b, points, attrs);
         self.remove_face(f);
-        loop1.push(EdgeUse { edge: e, reversed: true });
-        loop2.push(EdgeUse { edge: e, reversed: false });
+        loop1.push(EdgeUse {
+            edge: e,
+            reversed: true,
+        });
+        loop2.push(EdgeUse {
+            edge: e,
+            reversed: false,
+        });
         let f1 = self.add_face(loop1);
         let f2 = self.add_face(loop2);
         Some((e, f1, f2))

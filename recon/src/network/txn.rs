@@ -55,7 +55,10 @@ impl Network {
     fn write_raw(&mut self, c: Change) {
         match c {
             Change::Vertex(id, v) => self.vertices[id.idx()] = v,
-            Change::Edge(id, v) => self.edges[id.idx()] = v,
+            Change::Edge(id, v) => {
+                self.edges[id.idx()] = v;
+                self.slot_written(Change::Edge(id, None));
+            }
             Change::Face(id, v) => self.faces[id.idx()] = v,
             Change::Polyline(id, v) => {
                 self.polylines[id.idx()] = v;

@@ -86,7 +86,10 @@ impl Network {
             if polyline_owner[ed.polyline.idx()] > 1 {
                 return Err(InvariantError::BadPolyline(e, ed.polyline));
             }
-            let ends = [(ed.from, a.position, p.points[0]), (ed.to, b.position, p.points[p.points.len() - 1])];
+            let ends = [
+                (ed.from, a.position, p.points[0]),
+                (ed.to, b.position, p.points[p.points.len() - 1]),
+            ];
             for (vertex, vp, pp) in ends {
                 let d = dist(vp, pp);
                 if d > ENDPOINT_TOLERANCE_M || d.is_nan() {

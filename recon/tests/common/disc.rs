@@ -16,7 +16,9 @@ pub fn at(angle: f64) -> [f64; 3] {
 
 /// The boundary ellipse, drawn counter-clockwise, `n` points, the last a copy of the first.
 pub fn circle(n: usize) -> Vec<[f64; 3]> {
-    (0..=n).map(|i| at(2.0 * PI * i as f64 / n as f64)).collect()
+    (0..=n)
+        .map(|i| at(2.0 * PI * i as f64 / n as f64))
+        .collect()
 }
 
 /// Points every `step` metres from `a` to `b` (both included).
@@ -26,7 +28,11 @@ pub fn line(a: [f64; 3], b: [f64; 3], step: f64) -> Vec<[f64; 3]> {
     (0..=n)
         .map(|i| {
             let t = i as f64 / n as f64;
-            [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])]
+            [
+                a[0] + t * (b[0] - a[0]),
+                a[1] + t * (b[1] - a[1]),
+                a[2] + t * (b[2] - a[2]),
+            ]
         })
         .collect()
 }
@@ -80,7 +86,8 @@ pub fn chord_crossing(a: (f64, f64), b: (f64, f64)) -> Option<[f64; 2]> {
     let w = [r[0] - p[0], r[1] - p[1]];
     let t = (w[0] * d2[1] - w[1] * d2[0]) / den;
     let u = (w[0] * d1[1] - w[1] * d1[0]) / den;
-    ((0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u)).then(|| [p[0] + t * d1[0], p[1] + t * d1[1]])
+    ((0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u))
+        .then(|| [p[0] + t * d1[0], p[1] + t * d1[1]])
 }
 
 /// Random chords of the disc, kept only where the network they make is unambiguous for the default
@@ -101,9 +108,14 @@ pub fn separated_chords(rng: &mut Rng, n: usize, gap: f64) -> Vec<(f64, f64)> {
             ends.push(at(d.0));
             ends.push(at(d.1));
         }
-        let far = |p: [f64; 2], q: [f64; 3]| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt() >= gap;
+        let far = |p: [f64; 2], q: [f64; 3]| {
+            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt() >= gap
+        };
         let mine = [at(a0), at(a1)];
-        if !mine.iter().all(|m| ends.iter().all(|e| far([m[0], m[1]], *e))) {
+        if !mine
+            .iter()
+            .all(|m| ends.iter().all(|e| far([m[0], m[1]], *e)))
+        {
             continue;
         }
         let mut ok = true;
@@ -149,6 +161,9 @@ pub fn separated_chords(rng: &mut Rng, n: usize, gap: f64) -> Vec<(f64, f64)> {
     chords
 }
 
+/// A drawn stroke: points and whether it is closed.
+pub type Drawn = (Vec<[f64; 3]>, bool);
+
 /// A grid drawing on a circle of radius `radius` centred at the origin (z = Z): the boundary circle,
 /// `n` horizontal and `n` vertical lines `spacing` apart (centred), then `cells` short strokes, each
 /// cutting the top-left corner off one grid cell (from its left side's midpoint to its top side's
@@ -160,15 +175,20 @@ pub fn grid_drawing(
     spacing: f64,
     cells: usize,
     step: f64,
-) -> (Vec<(Vec<[f64; 3]>, bool)>, usize) {
+) -> (Vec<Drawn>, usize) {
     let m = (2.0 * PI * radius / step).ceil() as usize;
-    let mut out = vec![((0..=m)
-        .map(|i| {
-            let a = 2.0 * PI * i as f64 / m as f64 + 0.1;
-            [radius * a.cos(), radius * a.sin(), Z]
-        })
-        .collect(), true)];
-    let c: Vec<f64> = (0..n).map(|k| (k as f64 - (n as f64 - 1.0) / 2.0) * spacing).collect();
+    let mut out = vec![(
+        (0..=m)
+            .map(|i| {
+                let a = 2.0 * PI * i as f64 / m as f64 + 0.1;
+                [radius * a.cos(), radius * a.sin(), Z]
+            })
+            .collect(),
+        true,
+    )];
+    let c: Vec<f64> = (0..n)
+        .map(|k| (k as f64 - (n as f64 - 1.0) / 2.0) * spacing)
+        .collect();
     for &y in &c {
         let x = (radius * radius - y * y).sqrt();
         out.push((line([-x, y, Z], [x, y, Z], step), false));
@@ -184,7 +204,14 @@ pub fn grid_drawing(
                 break 'cells;
             }
             let (x, y) = (c[i], c[j]);
-            out.push((line([x, y + 0.5 * spacing, Z], [x + 0.5 * spacing, y + spacing, Z], step.min(0.002)), false));
+            out.push((
+                line(
+                    [x, y + 0.5 * spacing, Z],
+                    [x + 0.5 * spacing, y + spacing, Z],
+                    step.min(0.002),
+                ),
+                false,
+            ));
             k += 1;
         }
     }

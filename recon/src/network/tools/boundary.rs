@@ -52,7 +52,9 @@ pub fn insert_boundary(
         }
     }
     if pts.len() < 3 {
-        return Err(ToolError::BadCurve("a boundary needs at least 3 distinct points".into()));
+        return Err(ToolError::BadCurve(
+            "a boundary needs at least 3 distinct points".into(),
+        ));
     }
     let gap = dist(pts[0], pts[pts.len() - 1]);
     if gap > options.close_mm * 1e-3 {
@@ -65,7 +67,9 @@ pub fn insert_boundary(
         pts.pop();
     }
     if pts.len() < 3 {
-        return Err(ToolError::BadCurve("a boundary needs at least 3 distinct points".into()));
+        return Err(ToolError::BadCurve(
+            "a boundary needs at least 3 distinct points".into(),
+        ));
     }
     let (i, j) = diameter_pair(&pts);
     let first: Vec<[f64; 3]> = pts[i..=j].to_vec();
@@ -75,28 +79,33 @@ pub fn insert_boundary(
         stroke: curve.stroke,
         ..PolylineAttrs::default()
     };
-    Ok(net
-        .transact(|net| {
-            let va = net.push_vertex(Vertex {
-                position: pts[i],
-                edges: Vec::new(),
-            });
-            let vb = net.push_vertex(Vertex {
-                position: pts[j],
-                edges: Vec::new(),
-            });
-            let e1 = net.add_edge(va, vb, first, attrs);
-            let e2 = net.add_edge(vb, va, second, attrs);
-            let face = net.add_face(vec![
-                EdgeUse { edge: e1, reversed: false },
-                EdgeUse { edge: e2, reversed: false },
-            ]);
-            Ok::<_, ToolError>(BoundaryReport {
-                vertices: [va, vb],
-                edges: [e1, e2],
-                face,
-            })
-        })?)
+    net.transact(|net| {
+        let va = net.push_vertex(Vertex {
+            position: pts[i],
+            edges: Vec::new(),
+        });
+        let vb = net.push_vertex(Vertex {
+            position: pts[j],
+            edges: Vec::new(),
+        });
+        let e1 = net.add_edge(va, vb, first, attrs);
+        let e2 = net.add_edge(vb, va, second, attrs);
+        let face = net.add_face(vec![
+            EdgeUse {
+                edge: e1,
+                reversed: false,
+            },
+            EdgeUse {
+                edge: e2,
+                reversed: false,
+            },
+        ]);
+        Ok::<_, ToolError>(BoundaryReport {
+            vertices: [va, vb],
+            edges: [e1, e2],
+            face,
+        })
+    })
 }
 
 /// The two points farthest apart, `i < j` (exact for up to 4096 points, else over every k-th point).
@@ -105,7 +114,7 @@ fn diameter_pair(pts: &[[f64; 3]]) -> (usize, usize) {
     let mut best = (0, 1, -1.0);
     for i in (0..pts.len()).step_by(step) {
         for j in (i + 1..pts.len()).step_by(step) {
-            let d = dist(pts[i], pts[j]);
+            let d = crate::network::geom::dist2(pts[i], pts[j]);
             if d > best.2 {
                 best = (i, j, d);
             }

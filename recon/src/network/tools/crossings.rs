@@ -32,9 +32,32 @@ pub(crate) struct Hit {
 
 type Cell = (i64, i64, i64);
 
+/// A fast hasher for integer cell keys (FxHash's multiply-rotate; the keys are not adversarial).
+#[derive(Default, Clone, Copy)]
+struct CellHasher(u64);
+
+impl std::hash::Hasher for CellHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.write_u64(u64::from(*b));
+        }
+    }
+    fn write_i64(&mut self, v: i64) {
+        self.write_u64(v as u64);
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+type CellMap = HashMap<Cell, Vec<u32>, std::hash::BuildHasherDefault<CellHasher>>;
+
 struct Grid {
     cell: f64,
-    map: HashMap<Cell, Vec<u32>>,
+    map: CellMap,
 }
 
 impl Grid {
@@ -48,7 +71,8 @@ impl Grid {
 
     fn cells(&self, lo: P3, hi: P3) -> impl Iterator<Item = Cell> {
         let (a, b) = (self.key(lo), self.key(hi));
-        (a.0..=b.0).flat_map(move |x| (a.1..=b.1).flat_map(move |y| (a.2..=b.2).map(move |z| (x, y, z))))
+        (a.0..=b.0)
+            .flat_map(move |x| (a.1..=b.1).flat_map(move |y| (a.2..=b.2).map(move |z| (x, y, z))))
     }
 }
 
@@ -62,30 +86,28 @@ pub(crate) fn find_hits(net: &Network, curve: &[P3], arc: &[f64], threshold: f64
     let mean = total / (curve.len() - 1) as f64;
     let mut grid = Grid {
         cell: (2.0 * threshold).max(mean).max(1e-6),
-        map: HashMap::new(),
+        map: CellMap::default(),
     };
     for i in 0..curve.len() - 1 {
         let (lo, hi) = bbox(&curve[i..=i + 1]);
         let lo = [lo[0] - threshold, lo[1] - threshold, lo[2] - threshold];
         let hi = [hi[0] + threshold, hi[1] + threshold, hi[2] + threshold];
-        let cells: Vec<Cell> = grid.cells(lo, hi).collect();
-        for c in cells {
-            grid.map.entry(c).or_default().push(i as u32);
+        let (a, b) = (grid.key(lo), grid.key(hi));
+        for x in a.0..=b.0 {
+            for y in a.1..=b.1 {
+                for z in a.2..=b.2 {
+                    grid.map.entry((x, y, z)).or_default().push(i as u32);
+                }
+            }
         }
     }
     let curve_box = bbox(curve);
     let mut hits = Vec::new();
     let mut cand: Vec<u32> = Vec::new();
-    for (e, ed) in net.edges() {
-        let Some(poly) = net.polyline(ed.polyline) else {
-            continue;
-        };
-        if !boxes_overlap(curve_box, net.polyline_box(ed.polyline), threshold) {
-            continue;
-        }
+    for (e, poly, boxes) in net.edges_near(curve_box, threshold) {
         // (sigma, seg, t, point, distance) of every close segment pair.
         let mut close: Vec<(f64, usize, f64, P3, f64)> = Vec::new();
-        for j in 0..poly.points.len() - 1 {
+        for j in boxes.segments_near(curve_box, threshold, poly.points.len()) {
             let (q0, q1) = (poly.points[j], poly.points[j + 1]);
             let sb = bbox(&[q0, q1]);
             if !boxes_overlap(curve_box, sb, threshold) {
@@ -139,14 +161,8 @@ pub(crate) fn find_hits(net: &Network, curve: &[P3], arc: &[f64], threshold: f64
 pub(crate) fn nearest_point(net: &Network, p: P3, radius: f64) -> Option<Hit> {
     let pbox = (p, p);
     let mut best: Option<Hit> = None;
-    for (e, ed) in net.edges() {
-        let Some(poly) = net.polyline(ed.polyline) else {
-            continue;
-        };
-        if !boxes_overlap(pbox, net.polyline_box(ed.polyline), radius) {
-            continue;
-        }
-        for j in 0..poly.points.len() - 1 {
+    for (e, poly, boxes) in net.edges_near(pbox, radius) {
+        for j in boxes.segments_near(pbox, radius, poly.points.len()) {
             let (q0, q1) = (poly.points[j], poly.points[j + 1]);
             if !boxes_overlap(pbox, bbox(&[q0, q1]), radius) {
                 continue;

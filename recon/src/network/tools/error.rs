@@ -30,7 +30,9 @@ pub enum ToolError {
     #[error("rule \"valid curve\": {0}")]
     BadCurve(String),
     /// A boundary stroke does not end where it began.
-    #[error("rule \"closed boundary\": the ends are {gap_mm:.2} mm apart (limit {limit_mm:.2} mm)")]
+    #[error(
+        "rule \"closed boundary\": the ends are {gap_mm:.2} mm apart (limit {limit_mm:.2} mm)"
+    )]
     NotClosed {
         /// Distance between first and last point.
         gap_mm: f64,
@@ -49,7 +51,9 @@ pub enum ToolError {
         limit_mm: f64,
     },
     /// Rule 1 (FIRES thesis §5.1): a piece of the curve starts and ends on the same polyline.
-    #[error("rule 1 \"not on the same polyline\": a piece of the curve starts and ends on edge {edge}")]
+    #[error(
+        "rule 1 \"not on the same polyline\": a piece of the curve starts and ends on edge {edge}"
+    )]
     SamePolyline {
         /// The edge both ends lie on.
         edge: EdgeId,

@@ -125,7 +125,9 @@ pub fn insert_curve(
         }
     }
     if pts.len() < 2 {
-        return Err(ToolError::BadCurve("a curve needs at least 2 distinct points".into()));
+        return Err(ToolError::BadCurve(
+            "a curve needs at least 2 distinct points".into(),
+        ));
     }
     let thr = widened_m(options.intersect_mm, curve.sigma_mm, options.sigma_factor);
     let snap = widened_m(options.snap_mm, curve.sigma_mm, options.sigma_factor);
@@ -164,7 +166,9 @@ pub fn insert_curve(
         .filter(|s| matches!(s.anchor, Anchor::Vertex(_)))
         .count();
     if stops.len() < 2 {
-        return Err(ToolError::BadCurve("the curve meets the network at one point only".into()));
+        return Err(ToolError::BadCurve(
+            "the curve meets the network at one point only".into(),
+        ));
     }
     for w in stops.windows(2) {
         ctx.check_rule_one(w[0].anchor, w[1].anchor)?;
@@ -193,7 +197,11 @@ impl Ctx<'_> {
     fn stop_of(&self, h: &Hit, sigma: f64) -> Stop {
         let anchor = match self.net.edge(h.edge) {
             Some(ed) => {
-                let pos = |v| self.net.vertex(v).map_or(f64::INFINITY, |x| gap(x.position, h.point));
+                let pos = |v| {
+                    self.net
+                        .vertex(v)
+                        .map_or(f64::INFINITY, |x| gap(x.position, h.point))
+                };
                 let (df, dt) = (pos(ed.from), pos(ed.to));
                 if df <= self.snap && df <= dt {
                     Anchor::Vertex(ed.from)
@@ -247,7 +255,8 @@ impl Ctx<'_> {
         };
         if let Some(near) = nearest_point(self.net, p, self.snap) {
             if let Some(h) = first {
-                let on_it = near.distance <= self.thr || gap(h.point, near.point) <= self.snap + self.thr;
+                let on_it =
+                    near.distance <= self.thr || gap(h.point, near.point) <= self.snap + self.thr;
                 if on_it && self.along(end, h) <= self.snap + self.thr {
                     return Ok(trimmed(h));
                 }
@@ -268,7 +277,8 @@ impl Ctx<'_> {
                 return Ok(trimmed(h));
             }
         }
-        let distance = nearest_point(self.net, p, f64::INFINITY).map_or(f64::INFINITY, |h| h.distance);
+        let distance =
+            nearest_point(self.net, p, f64::INFINITY).map_or(f64::INFINITY, |h| h.distance);
         Err(ToolError::EndNotOnNetwork {
             end,
             distance_mm: distance * 1e3,
@@ -282,7 +292,8 @@ impl Ctx<'_> {
             (Anchor::Edge { edge: x, .. }, Anchor::Edge { edge: y, .. }) if x == y => {
                 Err(ToolError::SamePolyline { edge: x })
             }
-            (Anchor::Vertex(v), Anchor::Edge { edge, .. }) | (Anchor::Edge { edge, .. }, Anchor::Vertex(v))
+            (Anchor::Vertex(v), Anchor::Edge { edge, .. })
+            | (Anchor::Edge { edge, .. }, Anchor::Vertex(v))
                 if ends(edge).is_some_and(|(f, t)| f == v || t == v) =>
             {
                 Err(ToolError::SamePolyline { edge })
@@ -325,7 +336,9 @@ fn apply(
             Some((orig, first_half)) if orig == edge => first_half,
             _ => edge,
         };
-        let (v, halves) = net.split_edge(target, seg, t).ok_or_else(|| internal("split edge"))?;
+        let (v, halves) = net
+            .split_edge(target, seg, t)
+            .ok_or_else(|| internal("split edge"))?;
         vs[k] = Some(v);
         current = Some((edge, halves.map_or(target, |h| h.0)));
     }
@@ -350,7 +363,11 @@ fn apply(
         let pb = net.vertex(b).ok_or_else(|| internal("vertex"))?.position;
         let mut points = vec![pa];
         for (i, p) in pts.iter().enumerate() {
-            if arc[i] > sa && arc[i] < sb && gap(*p, pa) > SAME_POINT_M && gap(*p, pb) > SAME_POINT_M {
+            if arc[i] > sa
+                && arc[i] < sb
+                && gap(*p, pa) > SAME_POINT_M
+                && gap(*p, pb) > SAME_POINT_M
+            {
                 points.push(*p);
             }
         }
@@ -371,7 +388,9 @@ fn apply(
                 continue;
             }
             let fp = net.face_points(f);
-            let c = fp.iter().fold([0.0; 3], |s, p| [s[0] + p[0], s[1] + p[1], s[2] + p[2]]);
+            let c = fp
+                .iter()
+                .fold([0.0; 3], |s, p| [s[0] + p[0], s[1] + p[1], s[2] + p[2]]);
             let n = fp.len().max(1) as f64;
             let d = gap([c[0] / n, c[1] / n, c[2] / n], mid);
             if best.is_none_or(|(bd, _)| d < bd) {
