@@ -4,7 +4,10 @@
 mod common;
 
 use common::disc::{chord, chord_crossing, circle, separated_chords, Rng};
-use fires_recon::network::{build_network, BuildOptions, StrokeInput};
+use fires_recon::network::{
+    build_network, replay, BuildOptions, Journal, JournalError, Network, NetworkFile, Step,
+    StrokeInput,
+};
 
 fn stroke(id: u32, points: Vec<[f64; 3]>, closed: bool) -> StrokeInput {
     StrokeInput {
@@ -143,4 +146,43 @@ fn no_closed_stroke_means_no_network() {
     assert_eq!(net.n_vertices(), 0);
     assert_eq!(report.rejected.len(), 1);
     assert_eq!(report.rejected[0].stroke, 0);
+}
+
+#[test]
+fn the_journal_replays_to_the_same_network_bit_for_bit() {
+    let mut rng = Rng(0x5EED);
+    let chords = separated_chords(&mut rng, 10, 0.018);
+    let mut strokes = vec![stroke(0, circle(600), true)];
+    for (k, c) in chords.iter().enumerate() {
+        strokes.push(stroke(k as u32 + 1, chord(c.0, c.1, 0.004), false));
+    }
+    let (net, report) = build_network(&strokes, &BuildOptions::default());
+    let text = serde_json::to_string(&report.journal).unwrap();
+    let journal: Journal = serde_json::from_str(&text).unwrap();
+    let again = replay(&journal, &strokes).unwrap();
+    assert_eq!(again, net);
+    assert_eq!(NetworkFile::to_json(&again), NetworkFile::to_json(&net));
+    // An edited journal: drop the last step and the network is the one before it.
+    let mut shorter = journal.clone();
+    shorter.steps.pop();
+    let fewer = replay(&shorter, &strokes).unwrap();
+    assert_eq!(
+        fewer.n_faces() + 1 + report_crossings_of_last(&net, &fewer),
+        net.n_faces()
+    );
+    // A journal naming a missing stroke is refused.
+    let mut bad = journal;
+    bad.steps.push(Step::Insert {
+        stroke: 999,
+        options: Default::default(),
+    });
+    assert!(matches!(
+        replay(&bad, &strokes),
+        Err(JournalError::MissingStroke { stroke: 999, .. })
+    ));
+}
+
+/// Crossings of the last insertion: the vertices it added beyond its two ends.
+fn report_crossings_of_last(net: &Network, before: &Network) -> usize {
+    net.n_vertices() - before.n_vertices() - 2
 }

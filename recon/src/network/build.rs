@@ -9,6 +9,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::journal::{Journal, Step};
 use super::mesh::Network;
 use super::tools::{
     insert_boundary, insert_curve, Adjustment, BoundaryOptions, CurveInput, InsertOptions,
@@ -67,6 +68,8 @@ pub struct BuildReport {
     pub passes: usize,
     /// The result's topology.
     pub topology: Topology,
+    /// The tool applications made, in order; replaying it over the same strokes gives the same network.
+    pub journal: Journal,
 }
 
 fn curve(s: &StrokeInput) -> CurveInput<'_> {
@@ -96,6 +99,7 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
         adjustments: Vec::new(),
         passes: 0,
         topology: net.topology(),
+        journal: Journal::default(),
     };
     let boundary_options = BoundaryOptions {
         close_mm: options
@@ -107,6 +111,10 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
         if report.boundary.is_none() && s.closed {
             match insert_boundary(&mut net, curve(s), &boundary_options) {
                 Ok(_) => {
+                    report.journal.steps.push(Step::Boundary {
+                        stroke: s.id,
+                        close_mm: boundary_options.close_mm,
+                    });
                     report.boundary = Some(s.id);
                     report.used.push(s.id);
                     continue;
@@ -127,6 +135,10 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
                 let s = &strokes[*k];
                 match insert_curve(&mut net, curve(s), &options.insert) {
                     Ok((r, _)) => {
+                        report.journal.steps.push(Step::Insert {
+                            stroke: s.id,
+                            options: options.insert.clone(),
+                        });
                         report.used.push(s.id);
                         report
                             .adjustments
