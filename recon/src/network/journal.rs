@@ -34,6 +34,11 @@ pub enum Step {
         /// Thresholds.
         options: InsertOptions,
     },
+    /// Curve delete of a whole stroke.
+    Delete {
+        /// The stroke.
+        stroke: u32,
+    },
 }
 
 /// A whole journal document.
@@ -93,6 +98,11 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
     for (step, s) in journal.steps.iter().enumerate() {
         let id = match s {
             Step::Boundary { stroke, .. } | Step::Insert { stroke, .. } => *stroke,
+            Step::Delete { stroke } => {
+                delete_stroke(&mut net, *stroke)
+                    .map_err(|error| JournalError::Refused { step, error })?;
+                continue;
+            }
         };
         let st = strokes
             .iter()

@@ -68,6 +68,18 @@ pub enum ToolError {
         /// The intersection threshold used.
         threshold_mm: f64,
     },
+    /// No edge comes from the stroke.
+    #[error("rule \"stroke exists\": no edge comes from stroke {stroke}")]
+    NoSuchStroke {
+        /// The stroke id.
+        stroke: u32,
+    },
+    /// Deleting would open the surface or leave a dangling edge.
+    #[error("rule \"delete merges two faces\": removing the stroke would open the surface or leave edge {edge} dangling")]
+    CannotDelete {
+        /// The edge at fault.
+        edge: EdgeId,
+    },
 }
 
 impl ToolError {
@@ -79,6 +91,8 @@ impl ToolError {
             ToolError::EndNotOnNetwork { .. } => "ends on the network",
             ToolError::SamePolyline { .. } => "rule 1: not on the same polyline",
             ToolError::NoCommonFace { .. } => "rule 2: crossings intersect",
+            ToolError::NoSuchStroke { .. } => "stroke exists",
+            ToolError::CannotDelete { .. } => "delete merges two faces",
         }
     }
 

@@ -4,10 +4,12 @@
 
 mod boundary;
 mod crossings;
+mod delete;
 mod error;
 mod insert;
 
 pub use boundary::{insert_boundary, BoundaryOptions, BoundaryReport};
+pub use delete::{delete_stroke, DeleteReport};
 pub use error::{End, ToolError};
 pub use insert::{insert_curve, Adjustment, InsertOptions, InsertReport};
 
