@@ -8,7 +8,8 @@ use serde::{Deserialize, Serialize};
 use super::build::StrokeInput;
 use super::mesh::Network;
 use super::tools::{
-    insert_boundary, insert_curve, BoundaryOptions, CurveInput, InsertOptions, ToolError,
+    delete_stroke, insert_boundary, insert_curve, BoundaryOptions, CurveInput, InsertOptions,
+    ToolError,
 };
 
 /// The `format` value of a journal.
@@ -123,6 +124,7 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
             )
             .map(|_| ()),
             Step::Insert { options, .. } => insert_curve(&mut net, curve, options).map(|_| ()),
+            Step::Delete { .. } => Ok(()),
         };
         r.map_err(|error| JournalError::Refused { step, error })?;
     }
