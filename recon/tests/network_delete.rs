@@ -62,6 +62,37 @@ fn deleting_a_crossing_stroke_restores_the_topology_before_it() {
 }
 
 #[test]
+fn tagging_a_stroke_sharp_sets_all_its_pieces_and_replays() {
+    use fires_recon::network::tools::tag_sharp;
+    let mut net = disc();
+    assert!(add(&mut net, &vertical(0.0), 1));
+    assert!(add(
+        &mut net,
+        &chord(160f64.to_radians(), -20f64.to_radians(), 0.0),
+        2
+    ));
+    let before = net.clone();
+    let (n, t) = tag_sharp(&mut net, 1, 1.0).unwrap();
+    assert_eq!(n, 2, "the vertical is split in two by the crossing");
+    net.validate().unwrap();
+    let sharp = |net: &Network| {
+        net.polylines()
+            .filter(|(_, p)| p.attrs.sharpness == 1.0)
+            .map(|(_, p)| p.attrs.stroke)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(sharp(&net), vec![Some(1), Some(1)]);
+    net.undo(&t);
+    assert_eq!(net, before);
+    assert!(tag_sharp(&mut net, 1, 1.5).is_err());
+    assert!(matches!(
+        tag_sharp(&mut net, 7, 1.0),
+        Err(ToolError::NoSuchStroke { stroke: 7 })
+    ));
+    assert_eq!(net, before);
+}
+
+#[test]
 fn refused_deletes_leave_the_network_unchanged() {
     let mut net = disc();
     assert!(add(&mut net, &vertical(0.0), 1));

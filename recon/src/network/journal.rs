@@ -8,8 +8,8 @@ use serde::{Deserialize, Serialize};
 use super::build::StrokeInput;
 use super::mesh::Network;
 use super::tools::{
-    delete_stroke, insert_boundary, insert_curve, BoundaryOptions, CurveInput, InsertOptions,
-    ToolError,
+    delete_stroke, insert_boundary, insert_curve, tag_sharp, BoundaryOptions, CurveInput,
+    InsertOptions, ToolError,
 };
 
 /// The `format` value of a journal.
@@ -39,6 +39,13 @@ pub enum Step {
     Delete {
         /// The stroke.
         stroke: u32,
+    },
+    /// Tag a stroke's curves with a sharpness.
+    Sharp {
+        /// The stroke.
+        stroke: u32,
+        /// 0 (smooth) .. 1 (sharp).
+        sharpness: f64,
     },
 }
 
@@ -104,6 +111,11 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
                     .map_err(|error| JournalError::Refused { step, error })?;
                 continue;
             }
+            Step::Sharp { stroke, sharpness } => {
+                tag_sharp(&mut net, *stroke, *sharpness)
+                    .map_err(|error| JournalError::Refused { step, error })?;
+                continue;
+            }
         };
         let st = strokes
             .iter()
@@ -124,7 +136,7 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
             )
             .map(|_| ()),
             Step::Insert { options, .. } => insert_curve(&mut net, curve, options).map(|_| ()),
-            Step::Delete { .. } => Ok(()),
+            Step::Delete { .. } | Step::Sharp { .. } => Ok(()),
         };
         r.map_err(|error| JournalError::Refused { step, error })?;
     }
