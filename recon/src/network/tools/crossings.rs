@@ -77,11 +77,20 @@ impl Grid {
 }
 
 /// All places where `curve` (with cumulative arc lengths `arc`) meets the network within `threshold`
-/// metres, sorted by arc length.
-pub(crate) fn find_hits(net: &Network, curve: &[P3], arc: &[f64], threshold: f64) -> Vec<Hit> {
+/// metres, sorted by arc length, and the network points nearest to the curve's first and last point
+/// within `radius` (one pass over the network).
+pub(crate) fn find_hits(
+    net: &Network,
+    curve: &[P3],
+    arc: &[f64],
+    threshold: f64,
+    radius: f64,
+) -> (Vec<Hit>, [Option<Hit>; 2]) {
+    let mut ends: [Option<Hit>; 2] = [None, None];
     if curve.len() < 2 {
-        return Vec::new();
+        return (Vec::new(), ends);
     }
+    let end_points = [curve[0], curve[curve.len() - 1]];
     let total = arc[arc.len() - 1];
     let mean = total / (curve.len() - 1) as f64;
     let mut grid = Grid {
@@ -104,7 +113,23 @@ pub(crate) fn find_hits(net: &Network, curve: &[P3], arc: &[f64], threshold: f64
     let curve_box = bbox(curve);
     let mut hits = Vec::new();
     let mut cand: Vec<u32> = Vec::new();
-    for (e, poly, boxes) in net.edges_near(curve_box, threshold) {
+    for (e, poly, boxes) in net.edges_near(curve_box, threshold.max(radius)) {
+        for (k, &p) in end_points.iter().enumerate() {
+            for j in boxes.segments_near((p, p), radius, poly.points.len()) {
+                let (q0, q1) = (poly.points[j], poly.points[j + 1]);
+                let (_, t, d) = segment_segment(p, p, q0, q1);
+                if d <= radius && ends[k].is_none_or(|b| d < b.distance) {
+                    ends[k] = Some(Hit {
+                        sigma: 0.0,
+                        edge: e,
+                        seg: j,
+                        t,
+                        point: lerp(q0, q1, t),
+                        distance: d,
+                    });
+                }
+            }
+        }
         // (sigma, seg, t, point, distance) of every close segment pair.
         let mut close: Vec<(f64, usize, f64, P3, f64)> = Vec::new();
         for j in boxes.segments_near(curve_box, threshold, poly.points.len()) {
@@ -154,7 +179,7 @@ pub(crate) fn find_hits(net: &Network, curve: &[P3], arc: &[f64], threshold: f64
         }
     }
     hits.sort_by(|a, b| a.sigma.total_cmp(&b.sigma).then(a.edge.cmp(&b.edge)));
-    hits
+    (hits, ends)
 }
 
 /// The network point nearest to `p` within `radius` metres: `(edge, seg, t, point, distance)`.

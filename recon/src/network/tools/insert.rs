@@ -103,6 +103,7 @@ struct Ctx<'a> {
     pts: &'a [P3],
     total: f64,
     hits: &'a [Hit],
+    near_ends: [Option<Hit>; 2],
     thr: f64,
     snap: f64,
     over: f64,
@@ -133,12 +134,13 @@ pub fn insert_curve(
     let snap = widened_m(options.snap_mm, curve.sigma_mm, options.sigma_factor);
     let arc = arcs(&pts);
     let total = arc[arc.len() - 1];
-    let hits = find_hits(net, &pts, &arc, thr);
+    let (hits, near_ends) = find_hits(net, &pts, &arc, thr, snap);
     let ctx = Ctx {
         net,
         pts: &pts,
         total,
         hits: &hits,
+        near_ends,
         thr,
         snap,
         over: options.overshoot_mm * 1e-3,
@@ -253,7 +255,11 @@ impl Ctx<'_> {
             };
             (self.stop_of(h, h.sigma), adj)
         };
-        if let Some(near) = nearest_point(self.net, p, self.snap) {
+        let near = self.near_ends[match end {
+            End::Start => 0,
+            End::End => 1,
+        }];
+        if let Some(near) = near {
             if let Some(h) = first {
                 let on_it =
                     near.distance <= self.thr || gap(h.point, near.point) <= self.snap + self.thr;
