@@ -22,6 +22,13 @@ fn strokes(drawing: Vec<common::disc::Drawn>) -> Vec<StrokeInput> {
         .collect()
 }
 
+/// This thread's CPU time in ms (Linux `/proc/thread-self/schedstat`, updated at scheduler ticks, so
+/// only meaningful over tens of ms), so a loaded machine does not inflate the figure; `None` elsewhere.
+fn cpu_ms() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    Some(s.split_whitespace().next()?.parse::<f64>().ok()? * 1e-6)
+}
+
 fn median_ms(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
@@ -77,19 +84,22 @@ fn bench_network_tools() {
     let s = strokes(drawing);
     let points: usize = s.iter().map(|x| x.points.len()).sum();
     let mut times = Vec::new();
+    let mut cpu = Vec::new();
     let mut faces = 0;
-    for _ in 0..3 {
-        let t0 = Instant::now();
+    for _ in 0..5 {
+        let (t0, c0) = (Instant::now(), cpu_ms());
         let (net, report) = build_network(&s, &BuildOptions::default());
         times.push(t0.elapsed().as_secs_f64() * 1e3);
+        cpu.push(cpu_ms().zip(c0).map_or(f64::NAN, |(a, b)| a - b));
         assert!(report.rejected.is_empty(), "{:?}", &report.rejected[..1]);
         faces = net.n_faces();
         assert_eq!(faces, 1 + crossings + (s.len() - 1));
     }
     res.push(format!(
-        "{{\"tool\":\"build_network\",\"strokes\":{},\"crossings\":{crossings},\"points\":{points},\"faces\":{faces},\"median_ms\":{:.2}}}",
+        "{{\"tool\":\"build_network\",\"strokes\":{},\"crossings\":{crossings},\"points\":{points},\"faces\":{faces},\"median_ms\":{:.2},\"median_cpu_ms\":{:.2}}}",
         s.len(),
-        median_ms(times)
+        median_ms(times),
+        median_ms(cpu)
     ));
     for r in res {
         println!("{r}");
