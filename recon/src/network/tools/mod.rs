@@ -7,12 +7,14 @@ mod crossings;
 mod delete;
 mod error;
 mod insert;
+mod mirror;
 mod sharp;
 
 pub use boundary::{insert_boundary, BoundaryOptions, BoundaryReport};
 pub use delete::{delete_stroke, DeleteReport};
 pub use error::{End, ToolError};
 pub use insert::{insert_curve, Adjustment, InsertOptions, InsertReport};
+pub use mirror::{mirror_curve, Mirrored};
 pub use sharp::tag_sharp;
 
 /// A curve as a tool reads it: a drawn stroke or a generated curve.
