@@ -2,6 +2,7 @@
 //! report and [`Transaction`](super::Transaction), or returns a [`ToolError`] naming the rule that
 //! failed and leaves the network bit for bit as it was.
 
+mod align;
 mod boundary;
 mod crossings;
 mod delete;
@@ -10,6 +11,7 @@ mod insert;
 mod mirror;
 mod sharp;
 
+pub use align::{align_curves, transform_network, AlignOptions, Alignment};
 pub use boundary::{insert_boundary, BoundaryOptions, BoundaryReport};
 pub use delete::{delete_stroke, DeleteReport};
 pub use error::{End, ToolError};
