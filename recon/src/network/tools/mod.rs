@@ -10,6 +10,7 @@ mod error;
 mod insert;
 mod mirror;
 mod sharp;
+mod skinning;
 
 pub use align::{align_curves, transform_network, AlignOptions, Alignment};
 pub use boundary::{insert_boundary, BoundaryOptions, BoundaryReport};
@@ -18,6 +19,7 @@ pub use error::{End, ToolError};
 pub use insert::{insert_curve, Adjustment, InsertOptions, InsertReport};
 pub use mirror::{mirror_curve, Mirrored};
 pub use sharp::tag_sharp;
+pub use skinning::{half_direction, pair_halves};
 
 /// A curve as a tool reads it: a drawn stroke or a generated curve.
 #[derive(Clone, Copy, Debug)]
