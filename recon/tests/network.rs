@@ -344,3 +344,60 @@ fn random_tool_sequences_keep_the_invariants() {
         assert!(ok >= 10, "seed {seed}: only {ok} insertions succeeded");
     }
 }
+
+#[test]
+fn awkward_curves_are_refused_or_inserted_never_panic() {
+    let base = disc();
+    let boundary: Vec<[f64; 3]> = base
+        .edge_polyline(base.edges().next().unwrap().0)
+        .unwrap()
+        .points
+        .clone();
+    let v0 = base.vertices().next().unwrap().1.position;
+    let cases: Vec<Vec<[f64; 3]>> = vec![
+        vec![],
+        vec![[0.0, 0.0, Z]],
+        vec![[0.0, 0.0, Z], [f64::NAN, 0.0, Z]],
+        vec![[0.0, 0.0, Z]; 5],
+        vec![[1e300, 1e300, 1e300], [-1e300, 0.0, 0.0]],
+        // Along the boundary itself (tangential overlap).
+        boundary[10..120].to_vec(),
+        // From a boundary vertex straight across, with repeated points.
+        {
+            let mut c = chord(0.0, PI * 0.9, 0.0);
+            c.insert(1, c[0]);
+            c.push(*c.last().unwrap());
+            c
+        },
+        // Starting exactly at the split vertex.
+        common::disc::line(v0, [-0.05, -0.08, Z], 0.002),
+        // A closed loop inside the disc touching nothing.
+        circle(50)
+            .iter()
+            .map(|p| [p[0] * 0.3, p[1] * 0.3, Z])
+            .collect(),
+    ];
+    for c in &cases {
+        let mut net = base.clone();
+        let _ = insert(&mut net, c);
+        let mut empty = Network::new();
+        let r = insert_curve(&mut empty, CurveInput::new(c), &InsertOptions::default());
+        assert!(r.is_err());
+        assert_eq!(empty, Network::new());
+        let _ = insert_boundary(&mut empty, CurveInput::new(c), &BoundaryOptions::default());
+        empty.validate().unwrap();
+    }
+}
+
+#[test]
+fn one_long_segment_among_short_ones_does_not_blow_up_the_grid() {
+    let mut net = disc();
+    // 500 points 1 µm apart, then one diagonal jump across the disc, then 500 more.
+    let mut c: Vec<[f64; 3]> = (0..500)
+        .map(|i| [0.0, 0.097 - 1e-6 * i as f64, Z])
+        .collect();
+    c.extend((0..500).map(|i| [0.05 + 1e-6 * i as f64, -0.08, Z + 0.05]));
+    let t0 = std::time::Instant::now();
+    let _ = insert(&mut net, &c);
+    assert!(t0.elapsed().as_secs_f64() < 5.0);
+}

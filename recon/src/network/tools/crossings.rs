@@ -93,8 +93,10 @@ pub(crate) fn find_hits(
     let end_points = [curve[0], curve[curve.len() - 1]];
     let total = arc[arc.len() - 1];
     let mean = total / (curve.len() - 1) as f64;
+    // The cell is at least an eighth of the longest segment, so no segment covers more than ~10³ cells.
+    let longest = arc.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
     let mut grid = Grid {
-        cell: (2.0 * threshold).max(mean).max(1e-6),
+        cell: (2.0 * threshold).max(mean).max(longest / 8.0).max(1e-6),
         map: CellMap::default(),
     };
     for i in 0..curve.len() - 1 {
@@ -139,9 +141,17 @@ pub(crate) fn find_hits(
                 continue;
             }
             cand.clear();
-            for c in grid.cells(sb.0, sb.1) {
-                if let Some(v) = grid.map.get(&c) {
-                    cand.extend_from_slice(v);
+            let (ka, kb) = (grid.key(sb.0), grid.key(sb.1));
+            let span = |a: i64, b: i64| (b.saturating_sub(a)).saturating_add(1) as f64;
+            let n_cells = span(ka.0, kb.0) * span(ka.1, kb.1) * span(ka.2, kb.2);
+            if n_cells > (curve.len() as f64) {
+                // An old segment far longer than the cells: test it against every new segment.
+                cand.extend(0..(curve.len() - 1) as u32);
+            } else {
+                for c in grid.cells(sb.0, sb.1) {
+                    if let Some(v) = grid.map.get(&c) {
+                        cand.extend_from_slice(v);
+                    }
                 }
             }
             cand.sort_unstable();
