@@ -18,6 +18,7 @@ fn strokes(drawing: Vec<common::disc::Drawn>) -> Vec<StrokeInput> {
             points,
             closed,
             sigma_mm: None,
+            mode: 0,
         })
         .collect()
 }

@@ -15,6 +15,7 @@ fn stroke(id: u32, points: Vec<[f64; 3]>, closed: bool) -> StrokeInput {
         points,
         closed,
         sigma_mm: None,
+        mode: 0,
     }
 }
 
@@ -175,6 +176,7 @@ fn the_journal_replays_to_the_same_network_bit_for_bit() {
     bad.steps.push(Step::Insert {
         stroke: 999,
         options: Default::default(),
+        mirror: false,
     });
     assert!(matches!(
         replay(&bad, &strokes),
@@ -185,4 +187,51 @@ fn the_journal_replays_to_the_same_network_bit_for_bit() {
 /// Crossings of the last insertion: the vertices it added beyond its two ends.
 fn report_crossings_of_last(net: &Network, before: &Network) -> usize {
     net.n_vertices() - before.n_vertices() - 2
+}
+
+#[test]
+fn pen_modes_choose_the_tool() {
+    // Mode 2 (mirror): half an outline becomes the closed boundary; mode 1 (sharp): an insertion tagged
+    // sharp; mode 3 (hole, not implemented): reported.
+    let half: Vec<[f64; 3]> = (0..=100)
+        .map(|i| {
+            let a = std::f64::consts::PI * i as f64 / 100.0;
+            [0.1 * a.cos(), 0.097 * a.sin(), common::disc::Z]
+        })
+        .collect();
+    let strokes = vec![
+        StrokeInput {
+            mode: 2,
+            ..stroke(0, half, false)
+        },
+        StrokeInput {
+            mode: 1,
+            ..stroke(
+                1,
+                chord(80f64.to_radians(), 260f64.to_radians(), 0.0),
+                false,
+            )
+        },
+        StrokeInput {
+            mode: 3,
+            ..stroke(
+                2,
+                chord(10f64.to_radians(), 200f64.to_radians(), 0.0),
+                false,
+            )
+        },
+    ];
+    let (net, report) = build_network(&strokes, &BuildOptions::default());
+    net.validate().unwrap();
+    assert_eq!(report.boundary, Some(0));
+    assert_eq!(report.used, vec![0, 1]);
+    assert_eq!(report.rejected.len(), 1);
+    assert_eq!(report.rejected[0].rule, "pen mode has a tool");
+    assert_eq!(report.topology.faces, 2);
+    assert!(net
+        .polylines()
+        .filter(|(_, p)| p.attrs.stroke == Some(1))
+        .all(|(_, p)| p.attrs.sharpness == 1.0));
+    // The journal replays the mirror and the sharp tag bit for bit.
+    assert_eq!(replay(&report.journal, &strokes).unwrap(), net);
 }

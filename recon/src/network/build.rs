@@ -12,8 +12,8 @@ use serde::{Deserialize, Serialize};
 use super::journal::{Journal, Step};
 use super::mesh::Network;
 use super::tools::{
-    insert_boundary, insert_curve, Adjustment, BoundaryOptions, CurveInput, InsertOptions,
-    ToolError,
+    insert_boundary, insert_curve, mirror_curve, tag_sharp, Adjustment, BoundaryOptions,
+    CurveInput, InsertOptions, ToolError,
 };
 use super::topology::Topology;
 
@@ -28,6 +28,43 @@ pub struct StrokeInput {
     pub closed: bool,
     /// Largest one-sigma position uncertainty of its points, millimetres.
     pub sigma_mm: Option<f64>,
+    /// The pen mode held at pen-down: the strokes file's `buttons >> 1` (see [`PenMode`]).
+    pub mode: u8,
+}
+
+/// The tool a pen mode selects (the mode buttons are bits 1–3 of the strokes file's `buttons`; the
+/// value is `buttons >> 1`). Documented in docs/network.md.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PenMode {
+    /// 0: curve insertion (the first closed stroke is the boundary).
+    Insert,
+    /// 1: curve insertion, then the stroke's curves are tagged sharp (sharpness 1).
+    Sharp,
+    /// 2: mirroring; the mirrored closed curve is the boundary (or, after it, an insertion).
+    Mirror,
+    /// 3: hole creation (not yet implemented: reported).
+    Hole,
+    /// 4: border gluing (not yet implemented: reported).
+    Glue,
+    /// 5: skinning (not yet implemented: reported).
+    Skin,
+    /// 6, 7: no tool.
+    Other(u8),
+}
+
+impl PenMode {
+    /// The mode of a stroke's mode value (`buttons >> 1`).
+    pub fn from_mode(mode: u8) -> Self {
+        match mode & 0b111 {
+            0 => PenMode::Insert,
+            1 => PenMode::Sharp,
+            2 => PenMode::Mirror,
+            3 => PenMode::Hole,
+            4 => PenMode::Glue,
+            5 => PenMode::Skin,
+            m => PenMode::Other(m),
+        }
+    }
 }
 
 /// Options of [`build_network`].
@@ -106,6 +143,26 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
             .close_mm
             .unwrap_or(BoundaryOptions::default().close_mm),
     };
+    // Pen modes: mirrored strokes become their closed mirrored curve; modes without a tool are reported.
+    let mut prepared: Vec<StrokeInput> = Vec::with_capacity(strokes.len());
+    for s in strokes {
+        match PenMode::from_mode(s.mode) {
+            PenMode::Insert | PenMode::Sharp => prepared.push(s.clone()),
+            PenMode::Mirror => match mirror_curve(&s.points) {
+                Ok(m) => prepared.push(StrokeInput {
+                    points: m.points,
+                    closed: true,
+                    ..s.clone()
+                }),
+                Err(e) => report.rejected.push(rejected(s.id, &e)),
+            },
+            _ => report
+                .rejected
+                .push(rejected(s.id, &ToolError::NoToolForMode { mode: s.mode })),
+        }
+    }
+    let strokes = &prepared[..];
+    let mirror = |s: &StrokeInput| PenMode::from_mode(s.mode) == PenMode::Mirror;
     let mut pending: Vec<(usize, Option<ToolError>)> = Vec::new();
     for (k, s) in strokes.iter().enumerate() {
         if report.boundary.is_none() && s.closed {
@@ -114,6 +171,7 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
                     report.journal.steps.push(Step::Boundary {
                         stroke: s.id,
                         close_mm: boundary_options.close_mm,
+                        mirror: mirror(s),
                     });
                     report.boundary = Some(s.id);
                     report.used.push(s.id);
@@ -138,7 +196,16 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
                         report.journal.steps.push(Step::Insert {
                             stroke: s.id,
                             options: options.insert.clone(),
+                            mirror: mirror(s),
                         });
+                        if PenMode::from_mode(s.mode) == PenMode::Sharp
+                            && tag_sharp(&mut net, s.id, 1.0).is_ok()
+                        {
+                            report.journal.steps.push(Step::Sharp {
+                                stroke: s.id,
+                                sharpness: 1.0,
+                            });
+                        }
                         report.used.push(s.id);
                         report
                             .adjustments

@@ -8,8 +8,8 @@ use serde::{Deserialize, Serialize};
 use super::build::StrokeInput;
 use super::mesh::Network;
 use super::tools::{
-    delete_stroke, insert_boundary, insert_curve, tag_sharp, BoundaryOptions, CurveInput,
-    InsertOptions, ToolError,
+    delete_stroke, insert_boundary, insert_curve, mirror_curve, tag_sharp, BoundaryOptions,
+    CurveInput, InsertOptions, ToolError,
 };
 
 /// The `format` value of a journal.
@@ -27,6 +27,9 @@ pub enum Step {
         stroke: u32,
         /// Closing distance, mm.
         close_mm: f64,
+        /// The stroke is mirrored first (pen mode mirror).
+        #[serde(default)]
+        mirror: bool,
     },
     /// Curve insertion.
     Insert {
@@ -34,6 +37,9 @@ pub enum Step {
         stroke: u32,
         /// Thresholds.
         options: InsertOptions,
+        /// The stroke is mirrored first (pen mode mirror).
+        #[serde(default)]
+        mirror: bool,
     },
     /// Curve delete of a whole stroke.
     Delete {
@@ -121,8 +127,16 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
             .iter()
             .find(|x| x.id == id)
             .ok_or(JournalError::MissingStroke { step, stroke: id })?;
+        let mirrored = match s {
+            Step::Boundary { mirror: true, .. } | Step::Insert { mirror: true, .. } => Some(
+                mirror_curve(&st.points)
+                    .map_err(|error| JournalError::Refused { step, error })?
+                    .points,
+            ),
+            _ => None,
+        };
         let curve = CurveInput {
-            points: &st.points,
+            points: mirrored.as_deref().unwrap_or(&st.points),
             stroke: Some(st.id),
             sigma_mm: st.sigma_mm,
         };

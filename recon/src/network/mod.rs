@@ -20,7 +20,7 @@ mod topology;
 mod txn;
 mod validate;
 
-pub use build::{build_network, BuildOptions, BuildReport, Rejected, StrokeInput};
+pub use build::{build_network, BuildOptions, BuildReport, PenMode, Rejected, StrokeInput};
 pub use file::{NetworkFile, NetworkFileError, NETWORK_FORMAT, NETWORK_VERSION};
 pub use handles::{EdgeId, FaceId, PolylineId, VertexId};
 pub use journal::{replay, Journal, JournalError, Step, JOURNAL_FORMAT, JOURNAL_VERSION};

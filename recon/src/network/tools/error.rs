@@ -80,6 +80,12 @@ pub enum ToolError {
         /// The edge at fault.
         edge: EdgeId,
     },
+    /// The stroke's pen mode selects a tool that does not exist (yet).
+    #[error("rule \"pen mode has a tool\": mode {mode} selects no implemented tool")]
+    NoToolForMode {
+        /// The mode value (`buttons >> 1`).
+        mode: u8,
+    },
 }
 
 impl ToolError {
@@ -93,6 +99,7 @@ impl ToolError {
             ToolError::NoCommonFace { .. } => "rule 2: crossings intersect",
             ToolError::NoSuchStroke { .. } => "stroke exists",
             ToolError::CannotDelete { .. } => "delete merges two faces",
+            ToolError::NoToolForMode { .. } => "pen mode has a tool",
         }
     }
 
