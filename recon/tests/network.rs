@@ -401,3 +401,45 @@ fn one_long_segment_among_short_ones_does_not_blow_up_the_grid() {
     let _ = insert(&mut net, &c);
     assert!(t0.elapsed().as_secs_f64() < 5.0);
 }
+
+#[test]
+fn a_closed_curve_round_a_crossing_splits_four_faces() {
+    let mut net = disc();
+    insert(&mut net, &vertical(0.0)).unwrap();
+    insert(
+        &mut net,
+        &chord(160f64.to_radians(), -20f64.to_radians(), 0.0),
+    )
+    .unwrap();
+    let before = net.topology();
+    // A ring of radius 30 mm round the chords' crossing, starting away from both: 4 crossings on 4 edges.
+    let ring: Vec<[f64; 3]> = (0..=200)
+        .map(|i| {
+            let a = 0.5 + 2.0 * PI * i as f64 / 200.0;
+            [0.03 * a.cos(), 0.03 * a.sin(), Z]
+        })
+        .collect();
+    let r = insert(&mut net, &ring).unwrap();
+    let after = net.topology();
+    assert_eq!(r.edges.len(), 4);
+    assert_eq!(r.vertices.first(), r.vertices.last());
+    assert_eq!(
+        (
+            after.vertices - before.vertices,
+            after.edges - before.edges,
+            after.faces - before.faces
+        ),
+        (4, 8, 4)
+    );
+    assert_eq!((after.euler, after.boundaries, after.genus), (1, 1, 0));
+    // A ring crossing one chord twice would make two-sided faces (rule 1); one touching nothing is refused.
+    let mut net = disc();
+    insert(&mut net, &vertical(0.0)).unwrap();
+    let twice: Vec<[f64; 3]> = ring.iter().map(|p| [p[0] + 0.01, p[1], p[2]]).collect();
+    assert!(matches!(
+        insert(&mut net, &twice),
+        Err(ToolError::SamePolyline { .. })
+    ));
+    let lone: Vec<[f64; 3]> = ring.iter().map(|p| [p[0] + 0.05, p[1], p[2]]).collect();
+    assert!(insert(&mut net, &lone).is_err());
+}

@@ -36,6 +36,9 @@ pub struct InsertOptions {
     pub overshoot_mm: f64,
     /// Thresholds are widened to this many times the stroke's σ when that is larger.
     pub sigma_factor: f64,
+    /// A curve whose ends are this close is closed: when its ends are not on the network it is inserted
+    /// from its first crossing round to the same crossing.
+    pub close_mm: f64,
 }
 
 impl Default for InsertOptions {
@@ -45,6 +48,7 @@ impl Default for InsertOptions {
             snap_mm: 8.0,
             overshoot_mm: 30.0,
             sigma_factor: 3.0,
+            close_mm: 10.0,
         }
     }
 }
@@ -132,9 +136,37 @@ pub fn insert_curve(
     }
     let thr = widened_m(options.intersect_mm, curve.sigma_mm, options.sigma_factor);
     let snap = widened_m(options.snap_mm, curve.sigma_mm, options.sigma_factor);
-    let arc = arcs(&pts);
+    let mut arc = arcs(&pts);
+    let (mut hits, mut near_ends) = find_hits(net, &pts, &arc, thr, snap);
+    // A closed curve whose ends are not on the network starts and ends at its first crossing (thesis
+    // §5.2.1: closed curves are accepted when they cross the network).
+    let closed = pts.len() > 3 && gap(pts[0], pts[pts.len() - 1]) <= options.close_mm * 1e-3;
+    let mut rotated_loop = false;
+    if closed && near_ends.iter().all(|n| n.is_none()) {
+        if let Some(h) = hits.first() {
+            let i = arc
+                .partition_point(|&s| s <= h.sigma)
+                .clamp(1, pts.len() - 1)
+                - 1;
+            let span = arc[i + 1] - arc[i];
+            let t = if span > 0.0 {
+                (h.sigma - arc[i]) / span
+            } else {
+                0.0
+            };
+            let p = crate::network::geom::lerp(pts[i], pts[i + 1], t);
+            let body = &pts[..pts.len() - 1];
+            let mut rotated = vec![p];
+            rotated.extend(body[i + 1..].iter().chain(&body[..=i]).copied());
+            rotated.push(p);
+            rotated.dedup_by(|b, a| gap(*a, *b) <= SAME_POINT_M);
+            pts = rotated;
+            arc = arcs(&pts);
+            (hits, near_ends) = find_hits(net, &pts, &arc, thr, snap);
+            rotated_loop = true;
+        }
+    }
     let total = arc[arc.len() - 1];
-    let (hits, near_ends) = find_hits(net, &pts, &arc, thr, snap);
     let ctx = Ctx {
         net,
         pts: &pts,
@@ -149,8 +181,12 @@ pub fn insert_curve(
     let mut adjustments = Vec::new();
     let (start, adj) = ctx.resolve_end(End::Start)?;
     adjustments.extend(adj);
-    let (end, adj) = ctx.resolve_end(End::End)?;
+    let (mut end, adj) = ctx.resolve_end(End::End)?;
     adjustments.extend(adj);
+    if rotated_loop {
+        // The loop closes on the very point it starts from.
+        end.anchor = start.anchor;
+    }
     let mut stops = vec![start];
     for h in &hits {
         if h.sigma > start.sigma && h.sigma < end.sigma {
@@ -337,7 +373,14 @@ fn apply(
         .collect();
     cuts.sort_by(|a, b| a.0.cmp(&b.0).then(b.1.cmp(&a.1)).then(b.2.total_cmp(&a.2)));
     let mut current: Option<(EdgeId, EdgeId)> = None;
+    let mut last: Option<(EdgeId, usize, f64, VertexId)> = None;
     for (edge, seg, t, k) in cuts {
+        if let Some((le, ls, lt, lv)) = last {
+            if le == edge && ls == seg && lt == t {
+                vs[k] = Some(lv);
+                continue;
+            }
+        }
         let target = match current {
             Some((orig, first_half)) if orig == edge => first_half,
             _ => edge,
@@ -346,6 +389,7 @@ fn apply(
             .split_edge(target, seg, t)
             .ok_or_else(|| internal("split edge"))?;
         vs[k] = Some(v);
+        last = Some((edge, seg, t, v));
         current = Some((edge, halves.map_or(target, |h| h.0)));
     }
     let mut path: Vec<(VertexId, f64)> = Vec::with_capacity(stops.len());
