@@ -335,9 +335,27 @@ fn random_tool_sequences_keep_the_invariants() {
                 p[0] += bend * s;
                 p[2] += lift * s + rng.range(-5e-4, 5e-4);
             }
-            if insert(&mut net, &c).is_ok() {
+            let before = net.clone();
+            if let Ok((_, t)) =
+                insert_curve(&mut net, CurveInput::new(&c), &InsertOptions::default())
+            {
                 ok += 1;
+                net.validate().unwrap();
+                // Undo and redo every few tools.
+                if rng.unit() < 0.3 {
+                    let after = net.clone();
+                    net.undo(&t);
+                    assert_eq!(net, before, "seed {seed}: undo");
+                    net.redo(&t);
+                    assert_eq!(net, after, "seed {seed}: redo");
+                }
+            } else {
+                assert_eq!(
+                    net, before,
+                    "seed {seed}: a refused insertion changed the network"
+                );
             }
+            net.validate().unwrap();
             let t = net.topology();
             assert_eq!((t.euler, t.boundaries, t.genus), (1, 1, 0), "seed {seed}");
         }
