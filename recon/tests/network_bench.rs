@@ -6,7 +6,9 @@ mod common;
 use std::time::Instant;
 
 use common::disc::grid_drawing;
-use fires_recon::network::tools::{insert_curve, CurveInput, InsertOptions};
+use fires_recon::network::tools::{
+    delete_stroke, insert_curve, tag_sharp, transform_network, Alignment, CurveInput, InsertOptions,
+};
 use fires_recon::network::{build_network, BuildOptions, Network, StrokeInput};
 
 fn strokes(drawing: Vec<common::disc::Drawn>) -> Vec<StrokeInput> {
@@ -78,6 +80,37 @@ fn bench_network_tools() {
             "{{\"tool\":\"insert_{name}\",\"faces\":100,\"crossings\":{crossings},\"points\":{},\"median_ms\":{:.4}}}",
             c.len(),
             median_ms(times)
+        ));
+    }
+    // Curve delete of a grid line (9 crossings re-merged), sharp tag, moving the whole network.
+    let mut times = [Vec::new(), Vec::new(), Vec::new()];
+    for _ in 0..51 {
+        let mut n = net.clone();
+        let t0 = Instant::now();
+        delete_stroke(&mut n, 5).unwrap();
+        times[0].push(t0.elapsed().as_secs_f64() * 1e3);
+        let mut n = net.clone();
+        let t0 = Instant::now();
+        tag_sharp(&mut n, 5, 1.0).unwrap();
+        times[1].push(t0.elapsed().as_secs_f64() * 1e3);
+        let mut n = net.clone();
+        let a = Alignment {
+            rotation: [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+            translation: [0.01, 0.0, 0.0],
+            rms_m: 0.0,
+            ambiguous: false,
+        };
+        let t0 = Instant::now();
+        transform_network(&mut n, &a);
+        times[2].push(t0.elapsed().as_secs_f64() * 1e3);
+    }
+    for (name, t) in ["delete_stroke", "tag_sharp", "transform_network"]
+        .iter()
+        .zip(times)
+    {
+        res.push(format!(
+            "{{\"tool\":\"{name}\",\"faces\":100,\"median_ms\":{:.4}}}",
+            median_ms(t)
         ));
     }
     // 400 strokes, 2025 crossings: 45 + 45 lines 25 mm apart and 310 corner cuts.
