@@ -7,6 +7,7 @@
 //! * [`generate`]: analytic test meshes (icosphere, UV sphere, torus, cylinder, grid, cube);
 //! * [`operators`]: Laplacians, mass matrices, gradient/divergence, normals, curvatures,
 //!   geodesic distance, all returning faer sparse matrices or plain vectors;
+//! * [`network`]: the curve network (polyline mesh) and the sketching tools that build it;
 //! * [`solve`]: sparse Cholesky with symbolic reuse, fixed-value (Dirichlet) elimination and
 //!   stacked least squares (libigl's precompute/solve split);
 //! * [`subdivide`]: Loop subdivision;
@@ -22,6 +23,7 @@ pub mod generate;
 pub mod geometry;
 pub mod io;
 pub mod mesh;
+pub mod network;
 pub mod operators;
 pub mod render;
 pub mod solve;

@@ -1,0 +1,158 @@
+//! The sketch journal: the tool applications of a session in order (tool, the stroke it uses by id, its
+//! options), so a session can be saved, replayed, edited and shared. Replaying a journal over the same
+//! strokes gives the same network bit for bit (the tools are deterministic and the handles are slot
+//! indices). [`build_network`](super::build_network) returns the journal of what it applied.
+
+use serde::{Deserialize, Serialize};
+
+use super::build::StrokeInput;
+use super::mesh::Network;
+use super::tools::{
+    delete_stroke, insert_boundary, insert_curve, mirror_curve, tag_sharp, BoundaryOptions,
+    CurveInput, InsertOptions, ToolError,
+};
+
+/// The `format` value of a journal.
+pub const JOURNAL_FORMAT: &str = "fires-sketch-journal";
+/// The version this crate writes.
+pub const JOURNAL_VERSION: &str = "1.0";
+
+/// One tool application.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "tool", rename_all = "snake_case")]
+pub enum Step {
+    /// The initial boundary from a closed stroke.
+    Boundary {
+        /// The stroke.
+        stroke: u32,
+        /// Closing distance, mm.
+        close_mm: f64,
+        /// The stroke is mirrored first (pen mode mirror).
+        #[serde(default)]
+        mirror: bool,
+    },
+    /// Curve insertion.
+    Insert {
+        /// The stroke.
+        stroke: u32,
+        /// Thresholds.
+        options: InsertOptions,
+        /// The stroke is mirrored first (pen mode mirror).
+        #[serde(default)]
+        mirror: bool,
+    },
+    /// Curve delete of a whole stroke.
+    Delete {
+        /// The stroke.
+        stroke: u32,
+    },
+    /// Tag a stroke's curves with a sharpness.
+    Sharp {
+        /// The stroke.
+        stroke: u32,
+        /// 0 (smooth) .. 1 (sharp).
+        sharpness: f64,
+    },
+}
+
+/// A whole journal document.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Journal {
+    /// Always [`JOURNAL_FORMAT`].
+    pub format: String,
+    /// `MAJOR.MINOR`.
+    pub version: String,
+    /// The steps in order.
+    pub steps: Vec<Step>,
+}
+
+impl Default for Journal {
+    fn default() -> Self {
+        Journal {
+            format: JOURNAL_FORMAT.into(),
+            version: JOURNAL_VERSION.into(),
+            steps: Vec::new(),
+        }
+    }
+}
+
+/// Why a journal cannot be replayed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum JournalError {
+    /// Wrong format or major version.
+    #[error("not a version-1 sketch journal ({0:?})")]
+    NotAJournal(String),
+    /// A step names a stroke that is not in the strokes.
+    #[error("step {step}: stroke {stroke} is not in the strokes")]
+    MissingStroke {
+        /// Step number.
+        step: usize,
+        /// The stroke id.
+        stroke: u32,
+    },
+    /// A step's tool refused its stroke.
+    #[error("step {step}: {error}")]
+    Refused {
+        /// Step number.
+        step: usize,
+        /// The tool's error.
+        error: ToolError,
+    },
+}
+
+/// Replays `journal` over `strokes` from an empty network.
+pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, JournalError> {
+    if journal.format != JOURNAL_FORMAT || journal.version.split('.').next() != Some("1") {
+        return Err(JournalError::NotAJournal(format!(
+            "{} {}",
+            journal.format, journal.version
+        )));
+    }
+    let mut net = Network::new();
+    for (step, s) in journal.steps.iter().enumerate() {
+        let id = match s {
+            Step::Boundary { stroke, .. } | Step::Insert { stroke, .. } => *stroke,
+            Step::Delete { stroke } => {
+                delete_stroke(&mut net, *stroke)
+                    .map_err(|error| JournalError::Refused { step, error })?;
+                continue;
+            }
+            Step::Sharp { stroke, sharpness } => {
+                tag_sharp(&mut net, *stroke, *sharpness)
+                    .map_err(|error| JournalError::Refused { step, error })?;
+                continue;
+            }
+        };
+        let st = strokes
+            .iter()
+            .find(|x| x.id == id)
+            .ok_or(JournalError::MissingStroke { step, stroke: id })?;
+        let mirrored = match s {
+            Step::Boundary { mirror: true, .. } | Step::Insert { mirror: true, .. } => Some(
+                mirror_curve(&st.points)
+                    .map_err(|error| JournalError::Refused { step, error })?
+                    .points,
+            ),
+            _ => None,
+        };
+        let curve = CurveInput {
+            points: mirrored.as_deref().unwrap_or(&st.points),
+            stroke: Some(st.id),
+            sigma_mm: st.sigma_mm,
+        };
+        let r = match s {
+            Step::Boundary { close_mm, .. } => insert_boundary(
+                &mut net,
+                curve,
+                &BoundaryOptions {
+                    close_mm: *close_mm,
+                },
+            )
+            .map(|_| ()),
+            Step::Insert { options, .. } => insert_curve(&mut net, curve, options).map(|_| ()),
+            Step::Delete { .. } | Step::Sharp { .. } => Ok(()),
+        };
+        r.map_err(|error| JournalError::Refused { step, error })?;
+    }
+    Ok(net)
+}

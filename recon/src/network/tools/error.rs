@@ -1,0 +1,115 @@
+//! Why a tool refused a curve.
+
+use std::fmt;
+
+use crate::network::EdgeId;
+
+/// Which end of a curve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum End {
+    /// The first point drawn.
+    Start,
+    /// The last point drawn.
+    End,
+}
+
+impl fmt::Display for End {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            End::Start => "start",
+            End::End => "end",
+        })
+    }
+}
+
+/// A tool's refusal; the network is unchanged. Distances in millimetres.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ToolError {
+    /// The curve has fewer than two usable points or a point that is not finite.
+    #[error("rule \"valid curve\": {0}")]
+    BadCurve(String),
+    /// A boundary stroke does not end where it began.
+    #[error(
+        "rule \"closed boundary\": the ends are {gap_mm:.2} mm apart (limit {limit_mm:.2} mm)"
+    )]
+    NotClosed {
+        /// Distance between first and last point.
+        gap_mm: f64,
+        /// The closing distance.
+        limit_mm: f64,
+    },
+    /// An end of an inserted curve is neither on the network, nor within the snapping distance of it, nor
+    /// an overshoot past a crossing that can be trimmed.
+    #[error("rule \"ends on the network\": the {end} is {distance_mm:.2} mm from the network (snapping distance {limit_mm:.2} mm)")]
+    EndNotOnNetwork {
+        /// Which end.
+        end: End,
+        /// Distance from that end point to the nearest network point (infinite when none is near).
+        distance_mm: f64,
+        /// The snapping distance used.
+        limit_mm: f64,
+    },
+    /// Rule 1 (FIRES thesis §5.1): a piece of the curve starts and ends on the same polyline.
+    #[error(
+        "rule 1 \"not on the same polyline\": a piece of the curve starts and ends on edge {edge}"
+    )]
+    SamePolyline {
+        /// The edge both ends lie on.
+        edge: EdgeId,
+    },
+    /// Rule 2 (FIRES thesis §5.1): between two consecutive points where the curve meets the network there
+    /// is no face holding both, so the curve crossed a curve without coming within the intersection
+    /// threshold, or left the surface.
+    #[error("rule 2 \"crossings intersect\": piece {piece} of the curve lies in no face (intersection threshold {threshold_mm:.2} mm)")]
+    NoCommonFace {
+        /// The piece (0 = from the start to the first crossing).
+        piece: usize,
+        /// The intersection threshold used.
+        threshold_mm: f64,
+    },
+    /// No edge comes from the stroke.
+    #[error("rule \"stroke exists\": no edge comes from stroke {stroke}")]
+    NoSuchStroke {
+        /// The stroke id.
+        stroke: u32,
+    },
+    /// Deleting would open the surface or leave a dangling edge.
+    #[error("rule \"delete merges two faces\": removing the stroke would open the surface or leave edge {edge} dangling")]
+    CannotDelete {
+        /// The edge at fault.
+        edge: EdgeId,
+    },
+    /// The stroke's pen mode selects a tool that does not exist (yet).
+    #[error("rule \"pen mode has a tool\": mode {mode} selects no implemented tool")]
+    NoToolForMode {
+        /// The mode value (`buttons >> 1`).
+        mode: u8,
+    },
+}
+
+impl ToolError {
+    /// A short name of the rule that failed.
+    pub fn rule(&self) -> &'static str {
+        match self {
+            ToolError::BadCurve(_) => "valid curve",
+            ToolError::NotClosed { .. } => "closed boundary",
+            ToolError::EndNotOnNetwork { .. } => "ends on the network",
+            ToolError::SamePolyline { .. } => "rule 1: not on the same polyline",
+            ToolError::NoCommonFace { .. } => "rule 2: crossings intersect",
+            ToolError::NoSuchStroke { .. } => "stroke exists",
+            ToolError::CannotDelete { .. } => "delete merges two faces",
+            ToolError::NoToolForMode { .. } => "pen mode has a tool",
+        }
+    }
+
+    /// The distance that failed, millimetres, where there is one.
+    pub fn distance_mm(&self) -> Option<f64> {
+        match self {
+            ToolError::NotClosed { gap_mm, .. } => Some(*gap_mm),
+            ToolError::EndNotOnNetwork { distance_mm, .. } => Some(*distance_mm),
+            ToolError::NoCommonFace { threshold_mm, .. } => Some(*threshold_mm),
+            _ => None,
+        }
+    }
+}

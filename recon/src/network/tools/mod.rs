@@ -1,0 +1,50 @@
+//! The sketching tools (FIRES thesis ch. 5). Each is a transaction: it applies fully and returns its
+//! report and [`Transaction`](super::Transaction), or returns a [`ToolError`] naming the rule that
+//! failed and leaves the network bit for bit as it was.
+
+mod align;
+mod boundary;
+mod crossings;
+mod delete;
+mod error;
+mod insert;
+mod mirror;
+mod sharp;
+mod skinning;
+
+pub use align::{align_curves, transform_network, AlignOptions, Alignment};
+pub use boundary::{insert_boundary, BoundaryOptions, BoundaryReport};
+pub use delete::{delete_stroke, DeleteReport};
+pub use error::{End, ToolError};
+pub use insert::{insert_curve, Adjustment, InsertOptions, InsertReport};
+pub use mirror::{mirror_curve, Mirrored};
+pub use sharp::tag_sharp;
+pub use skinning::{half_direction, pair_halves};
+
+/// A curve as a tool reads it: a drawn stroke or a generated curve.
+#[derive(Clone, Copy, Debug)]
+pub struct CurveInput<'a> {
+    /// Points in drawing order, metres.
+    pub points: &'a [[f64; 3]],
+    /// The stroke it comes from, kept on every polyline made of it.
+    pub stroke: Option<u32>,
+    /// The curve's largest one-sigma position uncertainty, millimetres (widens the thresholds).
+    pub sigma_mm: Option<f64>,
+}
+
+impl<'a> CurveInput<'a> {
+    /// A curve with no stroke id and no uncertainty.
+    pub fn new(points: &'a [[f64; 3]]) -> Self {
+        CurveInput {
+            points,
+            stroke: None,
+            sigma_mm: None,
+        }
+    }
+}
+
+/// A threshold in millimetres widened to `factor · σ` when the curve's uncertainty is larger, in metres.
+pub(crate) fn widened_m(base_mm: f64, sigma_mm: Option<f64>, factor: f64) -> f64 {
+    let s = sigma_mm.filter(|s| s.is_finite()).unwrap_or(0.0) * factor;
+    base_mm.max(s) * 1e-3
+}

@@ -1,0 +1,463 @@
+//! The curve network: polyline mesh invariants, Euler bookkeeping and the boundary and curve-insertion
+//! tools (FIRES thesis §3.3 and §5.1–5.2.1).
+
+mod common;
+
+use common::disc::{chord, circle, vertical, Rng, Z};
+use fires_recon::network::tools::{
+    insert_boundary, insert_curve, Adjustment, BoundaryOptions, CurveInput, End, InsertOptions,
+    ToolError,
+};
+use fires_recon::network::{Network, NetworkFile, NetworkFileError};
+use std::f64::consts::PI;
+
+fn disc() -> Network {
+    let mut net = Network::new();
+    let c = circle(400);
+    insert_boundary(&mut net, CurveInput::new(&c), &BoundaryOptions::default()).unwrap();
+    net.validate().unwrap();
+    net
+}
+
+fn insert(
+    net: &mut Network,
+    pts: &[[f64; 3]],
+) -> Result<fires_recon::network::tools::InsertReport, ToolError> {
+    let before = net.clone();
+    let before_json = NetworkFile::to_json(net);
+    let r = insert_curve(net, CurveInput::new(pts), &InsertOptions::default());
+    net.validate().unwrap();
+    if r.is_err() {
+        assert_eq!(*net, before, "a refused insertion changed the network");
+        assert_eq!(NetworkFile::to_json(net), before_json);
+    }
+    r.map(|x| x.0)
+}
+
+#[test]
+fn boundary_is_one_face_of_two_edges_split_at_the_diameter() {
+    let net = disc();
+    let t = net.topology();
+    assert_eq!((t.vertices, t.edges, t.faces), (2, 2, 1));
+    assert_eq!((t.boundaries, t.components, t.euler, t.genus), (1, 1, 1, 0));
+    let p: Vec<[f64; 3]> = net.vertices().map(|(_, v)| v.position).collect();
+    assert_eq!(
+        p,
+        vec![[0.1, 0.0, Z], [-0.1, 0.097 * PI.sin(), Z]],
+        "split at the ellipse's major axis"
+    );
+    // An open curve is not a boundary.
+    let mut net = Network::new();
+    let open = chord(0.0, PI, 0.0);
+    let e = insert_boundary(
+        &mut net,
+        CurveInput::new(&open),
+        &BoundaryOptions::default(),
+    )
+    .unwrap_err();
+    assert!(matches!(e, ToolError::NotClosed { gap_mm, .. } if (gap_mm - 200.0).abs() < 1e-6));
+    assert_eq!(net, Network::new());
+}
+
+#[test]
+fn insertion_across_m_edges_gives_the_thesis_deltas() {
+    for m in 1..=5usize {
+        let mut net = disc();
+        let xs = [-0.05, -0.025, 0.0, 0.025, 0.05];
+        for &x in &xs[..m] {
+            let before = net.topology();
+            insert(&mut net, &vertical(x)).unwrap();
+            let after = net.topology();
+            assert_eq!(
+                (
+                    after.vertices - before.vertices,
+                    after.edges - before.edges,
+                    after.faces - before.faces
+                ),
+                (2, 3, 1)
+            );
+        }
+        // A chord from 160° to -20° crosses all m verticals.
+        let before = net.topology();
+        let r = insert(
+            &mut net,
+            &chord(160f64.to_radians(), -20f64.to_radians(), 0.0),
+        )
+        .unwrap();
+        let after = net.topology();
+        assert_eq!(r.crossings, m);
+        assert_eq!(r.snapped, 0);
+        assert_eq!(after.faces - before.faces, m + 1, "ΔF, m = {m}");
+        assert_eq!(after.edges - before.edges, 2 * m + 3, "ΔE, m = {m}");
+        assert_eq!(after.vertices - before.vertices, m + 2, "ΔV, m = {m}");
+        assert_eq!(after.euler, before.euler);
+        assert_eq!((after.boundaries, after.genus), (1, 0));
+        assert_eq!(r.edges.len(), m + 1);
+        // Every new edge carries the curve's attributes; every face has at least 3 edges.
+        assert!(net.faces().all(|(_, f)| f.uses.len() >= 3));
+    }
+}
+
+#[test]
+fn rule_one_same_polyline_is_refused_unchanged() {
+    let mut net = disc();
+    // Both ends on the top arc (the boundary is split at 0° and 180°), crossing nothing.
+    let e = insert(
+        &mut net,
+        &chord(30f64.to_radians(), 150f64.to_radians(), 0.0),
+    )
+    .unwrap_err();
+    assert!(matches!(e, ToolError::SamePolyline { .. }), "{e}");
+    assert_eq!(e.rule(), "rule 1: not on the same polyline");
+    // Once a vertical chord separates them the same stroke is fine: it crosses it once.
+    insert(&mut net, &vertical(0.0)).unwrap();
+    let r = insert(
+        &mut net,
+        &chord(30f64.to_radians(), 150f64.to_radians(), 0.0),
+    )
+    .unwrap();
+    assert_eq!(r.crossings, 1);
+    assert_eq!(net.topology().faces, 4);
+}
+
+#[test]
+fn rule_two_a_crossing_without_intersection_is_refused_unchanged() {
+    let mut net = disc();
+    insert(&mut net, &vertical(0.0)).unwrap();
+    // From 160° to -20°, lifted 30 mm over the vertical chord in the middle.
+    let mut c = chord(160f64.to_radians(), -20f64.to_radians(), 0.0);
+    let n = c.len();
+    for (i, p) in c.iter_mut().enumerate() {
+        p[2] = Z + 0.03 * (PI * i as f64 / (n - 1) as f64).sin();
+    }
+    let e = insert(&mut net, &c).unwrap_err();
+    assert!(matches!(e, ToolError::NoCommonFace { piece: 0, .. }), "{e}");
+    // Lowered to 3 mm (within the 5 mm threshold) it intersects.
+    for (i, p) in c.iter_mut().enumerate() {
+        p[2] = Z + 0.003 * (PI * i as f64 / (n - 1) as f64).sin();
+    }
+    assert_eq!(insert(&mut net, &c).unwrap().crossings, 1);
+}
+
+#[test]
+fn ends_off_the_network_are_refused_with_the_distance() {
+    let mut net = disc();
+    let e = insert(
+        &mut net,
+        &chord(80f64.to_radians(), -80f64.to_radians(), -0.02),
+    )
+    .unwrap_err();
+    match e {
+        ToolError::EndNotOnNetwork {
+            end: End::Start,
+            distance_mm,
+            limit_mm,
+        } => {
+            // 20 mm back along a chord at 10° to the radius: a little less than 20 mm from the boundary.
+            assert!(distance_mm > 18.0 && distance_mm < 20.0, "{distance_mm}");
+            assert_eq!(limit_mm, 8.0);
+        }
+        other => panic!("{other}"),
+    }
+}
+
+#[test]
+fn overshoot_is_trimmed_and_short_stop_extended() {
+    let (a0, a1) = (70f64.to_radians(), -110f64.to_radians());
+    let mut net = disc();
+    let r = insert(&mut net, &chord(a0, a1, 0.015)).unwrap();
+    assert_eq!(r.adjustments.len(), 2);
+    for a in &r.adjustments {
+        assert!(
+            matches!(a, Adjustment::Trimmed { length_mm, .. } if (length_mm - 15.0).abs() < 0.01),
+            "{a:?}"
+        );
+    }
+    let exact = {
+        let mut n = disc();
+        insert(&mut n, &chord(a0, a1, 0.0)).unwrap();
+        n
+    };
+    assert_eq!(net.topology(), exact.topology());
+    let mut net = disc();
+    let r = insert(&mut net, &chord(a0, a1, -0.006)).unwrap();
+    assert_eq!(r.adjustments.len(), 2);
+    for a in &r.adjustments {
+        assert!(
+            matches!(a, Adjustment::Extended { gap_mm, .. } if (gap_mm - 6.0).abs() < 0.2),
+            "{a:?}"
+        );
+    }
+    assert_eq!(net.topology(), exact.topology());
+    // The extended polyline ends on the boundary exactly (validate checks 1e-12) and starts there.
+    let e = r.edges[0];
+    let p = net.edge_polyline(e).unwrap();
+    let q = p.points[0];
+    let on_ellipse = (q[0] / 0.1).powi(2) + (q[1] / 0.097).powi(2);
+    assert!((on_ellipse - 1.0).abs() < 1e-3, "{on_ellipse}");
+}
+
+#[test]
+fn thresholds_widen_with_the_stroke_uncertainty() {
+    let c = chord(70f64.to_radians(), -110f64.to_radians(), -0.012);
+    let mut net = disc();
+    assert!(matches!(
+        insert(&mut net, &c),
+        Err(ToolError::EndNotOnNetwork { .. })
+    ));
+    let curve = CurveInput {
+        points: &c,
+        stroke: Some(7),
+        sigma_mm: Some(5.0),
+    };
+    let (r, _) = insert_curve(&mut net, curve, &InsertOptions::default()).unwrap();
+    net.validate().unwrap();
+    assert!(matches!(r.adjustments[0], Adjustment::Extended { .. }));
+    assert!(r
+        .edges
+        .iter()
+        .all(|&e| net.edge_polyline(e).unwrap().attrs.stroke == Some(7)));
+}
+
+#[test]
+fn a_curve_through_a_vertex_snaps_to_it() {
+    let mut net = disc();
+    insert(
+        &mut net,
+        &chord(60f64.to_radians(), 240f64.to_radians(), 0.0),
+    )
+    .unwrap();
+    insert(
+        &mut net,
+        &chord(120f64.to_radians(), 300f64.to_radians(), 0.0),
+    )
+    .unwrap();
+    assert_eq!(net.topology().faces, 4);
+    let before = net.topology();
+    // Through the centre, where the two chords cross.
+    let r = insert(
+        &mut net,
+        &chord(88.8f64.to_radians(), 268.8f64.to_radians(), 0.0),
+    )
+    .unwrap();
+    let after = net.topology();
+    assert_eq!(r.snapped, 1);
+    assert_eq!(r.vertices.len(), 3);
+    assert_eq!(after.vertices - before.vertices, 2);
+    assert_eq!(after.edges - before.edges, 4);
+    assert_eq!(after.faces - before.faces, 2);
+}
+
+#[test]
+fn undo_and_redo_restore_every_state_bit_for_bit() {
+    let mut net = disc();
+    let mut states = vec![net.clone()];
+    let mut txns = Vec::new();
+    for c in [
+        vertical(0.0),
+        chord(160f64.to_radians(), -20f64.to_radians(), 0.0),
+        vertical(0.05),
+    ] {
+        let (_, t) =
+            insert_curve(&mut net, CurveInput::new(&c), &InsertOptions::default()).unwrap();
+        txns.push(t);
+        states.push(net.clone());
+    }
+    for (k, t) in txns.iter().enumerate().rev() {
+        net.undo(t);
+        net.validate().unwrap();
+        assert_eq!(net, states[k]);
+    }
+    for (k, t) in txns.iter().enumerate() {
+        net.redo(t);
+        net.validate().unwrap();
+        assert_eq!(net, states[k + 1]);
+    }
+}
+
+#[test]
+fn network_json_round_trips_and_is_checked() {
+    let mut net = disc();
+    insert(&mut net, &vertical(0.0)).unwrap();
+    insert(
+        &mut net,
+        &chord(160f64.to_radians(), -20f64.to_radians(), 0.0),
+    )
+    .unwrap();
+    let text = NetworkFile::to_json(&net);
+    let back = NetworkFile::parse(&text).unwrap();
+    assert_eq!(back, net);
+    assert_eq!(NetworkFile::to_json(&back), text);
+    // A polyline end moved by 1 µm breaks invariant 2.
+    let mut file: NetworkFile = serde_json::from_str(&text).unwrap();
+    file.polylines[0].points[0][0] += 1e-6;
+    assert!(matches!(
+        file.to_network(),
+        Err(NetworkFileError::Invalid(_))
+    ));
+    // A dangling vertex breaks invariant 3; a wrong format is refused.
+    let mut file: NetworkFile = serde_json::from_str(&text).unwrap();
+    file.vertices[0].edges.pop();
+    assert!(file.to_network().is_err());
+    let mut file: NetworkFile = serde_json::from_str(&text).unwrap();
+    file.format = "x".into();
+    assert!(matches!(
+        file.to_network(),
+        Err(NetworkFileError::NotANetworkFile(_))
+    ));
+}
+
+#[test]
+fn random_tool_sequences_keep_the_invariants() {
+    for seed in 1..=6u64 {
+        let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let mut net = disc();
+        let mut ok = 0;
+        for _ in 0..60 {
+            let a0 = rng.range(0.0, 2.0 * PI);
+            let a1 = a0 + rng.range(0.3, 2.0 * PI - 0.3);
+            let extra = rng.range(-0.012, 0.02);
+            let mut c = chord(a0, a1, extra);
+            // Sometimes bend or lift the curve, sometimes add noise.
+            let bend = if rng.unit() < 0.3 {
+                rng.range(-0.02, 0.02)
+            } else {
+                0.0
+            };
+            let lift = if rng.unit() < 0.2 {
+                rng.range(0.0, 0.02)
+            } else {
+                0.0
+            };
+            let n = c.len();
+            for (i, p) in c.iter_mut().enumerate() {
+                let s = (PI * i as f64 / (n - 1).max(1) as f64).sin();
+                p[0] += bend * s;
+                p[2] += lift * s + rng.range(-5e-4, 5e-4);
+            }
+            let before = net.clone();
+            if let Ok((_, t)) =
+                insert_curve(&mut net, CurveInput::new(&c), &InsertOptions::default())
+            {
+                ok += 1;
+                net.validate().unwrap();
+                // Undo and redo every few tools.
+                if rng.unit() < 0.3 {
+                    let after = net.clone();
+                    net.undo(&t);
+                    assert_eq!(net, before, "seed {seed}: undo");
+                    net.redo(&t);
+                    assert_eq!(net, after, "seed {seed}: redo");
+                }
+            } else {
+                assert_eq!(
+                    net, before,
+                    "seed {seed}: a refused insertion changed the network"
+                );
+            }
+            net.validate().unwrap();
+            let t = net.topology();
+            assert_eq!((t.euler, t.boundaries, t.genus), (1, 1, 0), "seed {seed}");
+        }
+        assert!(ok >= 10, "seed {seed}: only {ok} insertions succeeded");
+    }
+}
+
+#[test]
+fn awkward_curves_are_refused_or_inserted_never_panic() {
+    let base = disc();
+    let boundary: Vec<[f64; 3]> = base
+        .edge_polyline(base.edges().next().unwrap().0)
+        .unwrap()
+        .points
+        .clone();
+    let v0 = base.vertices().next().unwrap().1.position;
+    let cases: Vec<Vec<[f64; 3]>> = vec![
+        vec![],
+        vec![[0.0, 0.0, Z]],
+        vec![[0.0, 0.0, Z], [f64::NAN, 0.0, Z]],
+        vec![[0.0, 0.0, Z]; 5],
+        vec![[1e300, 1e300, 1e300], [-1e300, 0.0, 0.0]],
+        // Along the boundary itself (tangential overlap).
+        boundary[10..120].to_vec(),
+        // From a boundary vertex straight across, with repeated points.
+        {
+            let mut c = chord(0.0, PI * 0.9, 0.0);
+            c.insert(1, c[0]);
+            c.push(*c.last().unwrap());
+            c
+        },
+        // Starting exactly at the split vertex.
+        common::disc::line(v0, [-0.05, -0.08, Z], 0.002),
+        // A closed loop inside the disc touching nothing.
+        circle(50)
+            .iter()
+            .map(|p| [p[0] * 0.3, p[1] * 0.3, Z])
+            .collect(),
+    ];
+    for c in &cases {
+        let mut net = base.clone();
+        let _ = insert(&mut net, c);
+        let mut empty = Network::new();
+        let r = insert_curve(&mut empty, CurveInput::new(c), &InsertOptions::default());
+        assert!(r.is_err());
+        assert_eq!(empty, Network::new());
+        let _ = insert_boundary(&mut empty, CurveInput::new(c), &BoundaryOptions::default());
+        empty.validate().unwrap();
+    }
+}
+
+#[test]
+fn one_long_segment_among_short_ones_does_not_blow_up_the_grid() {
+    let mut net = disc();
+    // 500 points 1 µm apart, then one diagonal jump across the disc, then 500 more.
+    let mut c: Vec<[f64; 3]> = (0..500)
+        .map(|i| [0.0, 0.097 - 1e-6 * i as f64, Z])
+        .collect();
+    c.extend((0..500).map(|i| [0.05 + 1e-6 * i as f64, -0.08, Z + 0.05]));
+    let t0 = std::time::Instant::now();
+    let _ = insert(&mut net, &c);
+    assert!(t0.elapsed().as_secs_f64() < 5.0);
+}
+
+#[test]
+fn a_closed_curve_round_a_crossing_splits_four_faces() {
+    let mut net = disc();
+    insert(&mut net, &vertical(0.0)).unwrap();
+    insert(
+        &mut net,
+        &chord(160f64.to_radians(), -20f64.to_radians(), 0.0),
+    )
+    .unwrap();
+    let before = net.topology();
+    // A ring of radius 30 mm round the chords' crossing, starting away from both: 4 crossings on 4 edges.
+    let ring: Vec<[f64; 3]> = (0..=200)
+        .map(|i| {
+            let a = 0.5 + 2.0 * PI * i as f64 / 200.0;
+            [0.03 * a.cos(), 0.03 * a.sin(), Z]
+        })
+        .collect();
+    let r = insert(&mut net, &ring).unwrap();
+    let after = net.topology();
+    assert_eq!(r.edges.len(), 4);
+    assert_eq!(r.vertices.first(), r.vertices.last());
+    assert_eq!(
+        (
+            after.vertices - before.vertices,
+            after.edges - before.edges,
+            after.faces - before.faces
+        ),
+        (4, 8, 4)
+    );
+    assert_eq!((after.euler, after.boundaries, after.genus), (1, 1, 0));
+    // A ring crossing one chord twice would make two-sided faces (rule 1); one touching nothing is refused.
+    let mut net = disc();
+    insert(&mut net, &vertical(0.0)).unwrap();
+    let twice: Vec<[f64; 3]> = ring.iter().map(|p| [p[0] + 0.01, p[1], p[2]]).collect();
+    assert!(matches!(
+        insert(&mut net, &twice),
+        Err(ToolError::SamePolyline { .. })
+    ));
+    let lone: Vec<[f64; 3]> = ring.iter().map(|p| [p[0] + 0.05, p[1], p[2]]).collect();
+    assert!(insert(&mut net, &lone).is_err());
+}
