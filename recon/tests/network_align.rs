@@ -1,4 +1,4 @@
-//! Alignment by PCA frames (+ ICP): criterion 24 of the FIRES digest — an asymmetric curve, a random rigid
+//! Alignment by PCA frames (+ ICP): FIRES thesis, §5.3 — an asymmetric curve, a random rigid
 //! motion, reversed point order and 0.5 mm noise give rotation error < 1°, translation error < 1 mm,
 //! det = +1; moving the network keeps it valid.
 

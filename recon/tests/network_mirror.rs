@@ -1,5 +1,5 @@
 //! Mirroring: the result lies in the curve's least-squares plane, is closed and symmetric about the
-//! end-point axis to 1e-9 m (criterion 23 of the FIRES digest), and makes a valid boundary.
+//! end-point axis to 1e-9 m (FIRES thesis, §5.1), and makes a valid boundary.
 
 mod common;
 

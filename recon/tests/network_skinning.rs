@@ -1,4 +1,4 @@
-//! Skinning's automatic half pairing (criterion 22 of the FIRES digest): ellipse profiles at consecutive
+//! Skinning's automatic half pairing (FIRES thesis, §5.2: halves paired where the dihedral angle is below 90°): ellipse profiles at consecutive
 //! dihedral angles 0–80°, random in-plane rotations and spine placements, halves labelled at random:
 //! the pairing is right in 100% of cases.
 

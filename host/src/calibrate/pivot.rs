@@ -1,6 +1,6 @@
 //! Pen-tip pivot calibration: the user holds the tip still on a point and rotates the pen; the
 //! tip offset and the pivot point are fitted by linear least squares, and the residual is reported
-//! in millimetres (anchors-tracking.md §8.7: pivot calibration with a coverage check).
+//! in millimetres (the standard pivot calibration of tracked tools, with a coverage check).
 //!
 //! - [`pivot_axis`]: the optical case. Collinear LEDs give a reference point `p_i` (e.g. LED 1)
 //!   and the unit axis `v_i` (towards the tip) per frame; the tip lies on the axis, so

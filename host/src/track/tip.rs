@@ -149,7 +149,7 @@ mod tests {
     use crate::track::synth::{PenPose, SplitMix64};
 
     #[test]
-    fn stored_centroids_match_the_digest_table() {
+    fn stored_centroids_match_the_thesis_table() {
         let est = TipEstimator::new(&PenGeometry::thesis());
         let table = [
             (0b0011, 35.0),

@@ -9,7 +9,7 @@
 //! the component's bounding box grown by `centroid_margin` pixels, with weights `max(I - b, 0)`
 //! where `b` is the background (fixed, or the mean of the grown box's border ring). Including the
 //! faint tails makes the centroid nearly unbiased for Gaussian spots (opentrack's point extractor
-//! fixes the same one-pixel jumps with mean-shift, anchors-tracking.md §3).
+//! fixes the same one-pixel jumps with mean-shift).
 //!
 //! A search window predicted from the tracker state can be given; the detector falls back to the
 //! full frame when the window yields too few blobs or a blob touches the window border.

@@ -1,5 +1,5 @@
-//! Transactions: every tool applies fully or not at all (FIRES digest of the thesis, "left unspecified":
-//! transactional tool application and undo/redo).
+//! Transactions: every tool applies fully or not at all (the FIRES thesis, ch. 5, leaves
+//! this unspecified; transactional tools and undo/redo are our design, docs/network.md).
 //!
 //! While a transaction is open every slot write records the slot's previous value. Rolling back restores
 //! the old values in reverse order and truncates the arenas to their lengths at the start, which gives

@@ -10,8 +10,8 @@
 //!   equations.
 //!
 //! Threading: everything defaults to `Par::Seq`. On the 2-core machines here faer's
-//! parallel sparse solves were measured 10–16× slower than sequential ones (faer #211,
-//! anchors-geometry §6); parallelise across right-hand sides instead if needed.
+//! parallel sparse solves were measured 10–16× slower than sequential ones (faer issue
+//! #211); parallelise across right-hand sides instead if needed.
 
 mod cholesky;
 mod error;

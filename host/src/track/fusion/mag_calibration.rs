@@ -1,5 +1,5 @@
 //! Online hard-iron calibration of the magnetometer: a sphere fit to the raw readings
-//! (anchors-tracking.md: psmoveapi's "Possible Yaw Drift", #442, was fixed by magnetometer
+//! (psmoveapi's "Possible Yaw Drift", issue #442, was fixed by magnetometer
 //! calibration; there the user runs `psmove calibrate`, here the session's own motion is used).
 //!
 //! The pen's board (battery, Bluetooth module, traces) adds a constant field `h` to the Earth's

@@ -1,5 +1,5 @@
 //! The default direction filter: a Mahony-style nonlinear complementary filter on SO(3)
-//! (anchors-tracking.md §1: psmoveapi's complementary MARG; §4: Monado's gravity-gated 3DoF),
+//! (as psmoveapi's complementary MARG filter and Monado's gravity-gated 3DoF tracker),
 //! extended with vision corrections. It beats the thesis model (eqs. 4.18-4.21) because it
 //! integrates the gyroscope instead of inferring the rate from the angle dynamics.
 //!
@@ -15,7 +15,7 @@
 //! in the pen frame; the correction (a fraction `vision_gain` of it) is transported to the current
 //! time and applied, and feeds the bias estimate. So late, out-of-order frames are handled
 //! without rewinding the IMU (roll about the pen axis stays IMU-only, as it must with
-//! collinear LEDs, anchors-tracking.md §8.4).
+//! collinear LEDs).
 
 use super::imu::{ImuSample, WorldReference};
 use super::DirectionFilter;
