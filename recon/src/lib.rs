@@ -21,6 +21,7 @@ pub mod bench;
 pub mod edit;
 pub mod generate;
 pub mod geometry;
+mod handle;
 pub mod io;
 pub mod mesh;
 pub mod network;

@@ -1,38 +1,7 @@
 //! Typed element handles. Each is a `u32` index into the mesh's arrays; a halfedge's
 //! twin is `h ^ 1` and its edge is `h / 2` (implicit twins, as in pmp-library).
 
-use std::fmt;
-
-macro_rules! handle {
-    ($(#[$doc:meta])* $name:ident, $prefix:literal) => {
-        $(#[$doc])*
-        #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-        pub struct $name(pub(crate) u32);
-
-        impl $name {
-            /// Builds a handle from an index. No check is made that it exists in any mesh.
-            pub const fn new(index: usize) -> Self {
-                Self(index as u32)
-            }
-            /// The index of this element in the mesh's arrays.
-            pub const fn idx(self) -> usize {
-                self.0 as usize
-            }
-        }
-
-        impl fmt::Debug for $name {
-            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                write!(f, concat!($prefix, "{}"), self.0)
-            }
-        }
-
-        impl fmt::Display for $name {
-            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                fmt::Debug::fmt(self, f)
-            }
-        }
-    };
-}
+use crate::handle::handle;
 
 handle!(
     /// A vertex.
