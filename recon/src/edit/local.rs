@@ -2,9 +2,6 @@
 //! Laplacian, per-face hat-function gradients and graph distances. Rows of ROI vertices
 //! equal the rows of the whole mesh's operators (their stencils are complete).
 
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
-
 use super::problem::EditProblem;
 use crate::geometry::{cot_of_angle_between, triangle_normal, Vec3};
 use crate::solve::{sparse_from_triplets, SolveError, SparseMatrix};
@@ -84,41 +81,13 @@ pub fn face_gradients(p: &EditProblem, x: &[Vec3]) -> Vec<Option<(f64, [Vec3; 3]
         .collect()
 }
 
-#[derive(PartialEq)]
-struct Item(f64, usize);
-impl Eq for Item {}
-impl PartialOrd for Item {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl Ord for Item {
-    fn cmp(&self, o: &Self) -> Ordering {
-        o.0.total_cmp(&self.0)
-    }
-}
-
 /// Shortest edge-path distance over the local graph from `sources` (∞ if unreachable).
 pub fn graph_distance(p: &EditProblem, sources: &[usize]) -> Vec<f64> {
-    let mut d = vec![f64::INFINITY; p.len()];
-    let mut heap = BinaryHeap::new();
-    for &s in sources {
-        d[s] = 0.0;
-        heap.push(Item(0.0, s));
-    }
-    while let Some(Item(dist, i)) = heap.pop() {
-        if dist > d[i] {
-            continue;
-        }
-        for &j in &p.neighbors[i] {
-            let nd = dist + p.rest[i].distance(p.rest[j]);
-            if nd < d[j] {
-                d[j] = nd;
-                heap.push(Item(nd, j));
-            }
-        }
-    }
-    d
+    crate::operators::dijkstra(p.len(), sources, |i| {
+        p.neighbors[i]
+            .iter()
+            .map(move |&j| (j, p.rest[i].distance(p.rest[j])))
+    })
 }
 
 /// Positions as an `n × 3` faer matrix.

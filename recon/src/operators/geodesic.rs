@@ -124,27 +124,43 @@ pub fn geodesic_dijkstra(
     mesh: &SurfaceMesh,
     sources: &[Vertex],
 ) -> Result<Vec<f64>, OperatorError> {
-    let mut dist = vec![f64::INFINITY; mesh.vertices_size()];
-    let mut heap = BinaryHeap::new();
     for &s in sources {
-        if s.idx() >= dist.len() || mesh.is_deleted_vertex(s) {
+        if s.idx() >= mesh.vertices_size() || mesh.is_deleted_vertex(s) {
             return Err(OperatorError::InvalidVertex(s));
         }
-        dist[s.idx()] = 0.0;
-        heap.push(Item(0.0, s.idx()));
+    }
+    let starts: Vec<usize> = sources.iter().map(|s| s.idx()).collect();
+    Ok(dijkstra(mesh.vertices_size(), &starts, |i| {
+        let v = Vertex::new(i);
+        mesh.vertex_vertices(v)
+            .map(move |w| (w.idx(), mesh.position(v).distance(mesh.position(w))))
+    }))
+}
+
+/// Shortest-path distances over a graph of `n` nodes from `sources` (∞ where unreachable): `edges(i)` lists the
+/// neighbours of node `i` with the edge lengths (non-negative). Dijkstra's algorithm with a binary heap.
+pub(crate) fn dijkstra<I: IntoIterator<Item = (usize, f64)>>(
+    n: usize,
+    sources: &[usize],
+    mut edges: impl FnMut(usize) -> I,
+) -> Vec<f64> {
+    let mut dist = vec![f64::INFINITY; n];
+    let mut heap = BinaryHeap::new();
+    for &s in sources {
+        dist[s] = 0.0;
+        heap.push(Item(0.0, s));
     }
     while let Some(Item(d, i)) = heap.pop() {
         if d > dist[i] {
             continue;
         }
-        let v = Vertex::new(i);
-        for w in mesh.vertex_vertices(v) {
-            let nd = d + mesh.position(v).distance(mesh.position(w));
-            if nd < dist[w.idx()] {
-                dist[w.idx()] = nd;
-                heap.push(Item(nd, w.idx()));
+        for (j, len) in edges(i) {
+            let nd = d + len;
+            if nd < dist[j] {
+                dist[j] = nd;
+                heap.push(Item(nd, j));
             }
         }
     }
-    Ok(dist)
+    dist
 }

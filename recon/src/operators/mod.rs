@@ -37,6 +37,7 @@ pub use cotan::{clamp_negative_offdiagonal, cotan_matrix};
 pub use curvature::{
     angle_defects, gaussian_curvature, mean_curvature, mean_curvature_normals, principal_curvatures,
 };
+pub(crate) use geodesic::dijkstra;
 pub use geodesic::{geodesic_dijkstra, geodesic_heat, HeatGeodesic};
 pub use gradient::{divergence_matrix, gradient_matrix, vertex_gradient_matrix};
 pub use laplacians::{laplacian, LaplacianKind};
