@@ -6,8 +6,8 @@ mod common;
 
 use common::disc::{chord, circle, Rng};
 use fires_recon::network::tools::{
-    align_curves, insert_boundary, insert_curve, transform_network, AlignOptions, BoundaryOptions,
-    CurveInput, InsertOptions,
+    align_curves, insert_boundary, insert_curve, quaternion_matrix, transform_network,
+    AlignOptions, BoundaryOptions, CurveInput, InsertOptions,
 };
 use fires_recon::network::Network;
 
@@ -18,24 +18,7 @@ fn rotation(rng: &mut Rng) -> [[f64; 3]; 3] {
         *x = rng.range(-1.0, 1.0);
     }
     let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let [w, x, y, z] = q.map(|v| v / n);
-    [
-        [
-            w * w + x * x - y * y - z * z,
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-        ],
-        [
-            2.0 * (x * y + w * z),
-            w * w - x * x + y * y - z * z,
-            2.0 * (y * z - w * x),
-        ],
-        [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            w * w - x * x - y * y + z * z,
-        ],
-    ]
+    quaternion_matrix(q.map(|v| v / n))
 }
 
 fn apply(r: &[[f64; 3]; 3], t: [f64; 3], p: [f64; 3]) -> [f64; 3] {

@@ -215,8 +215,13 @@ fn horn(pairs: &[(P3, P3)]) -> Alignment {
     let m = (0..4)
         .max_by(|&i, &j| vals[i].total_cmp(&vals[j]))
         .unwrap_or(0);
-    let (w, x, y, z) = (vecs[0][m], vecs[1][m], vecs[2][m], vecs[3][m]);
-    let r = [
+    let r = quaternion_matrix([vecs[0][m], vecs[1][m], vecs[2][m], vecs[3][m]]);
+    motion(r, cp, cq)
+}
+
+/// The rotation matrix of the unit quaternion `[w, x, y, z]` (row-major).
+pub fn quaternion_matrix([w, x, y, z]: [f64; 4]) -> [[f64; 3]; 3] {
+    [
         [
             w * w + x * x - y * y - z * z,
             2.0 * (x * y - w * z),
@@ -232,8 +237,7 @@ fn horn(pairs: &[(P3, P3)]) -> Alignment {
             2.0 * (y * z + w * x),
             w * w - x * x - y * y + z * z,
         ],
-    ];
-    motion(r, cp, cq)
+    ]
 }
 
 /// The rigid motion that carries `reference` (a curve of the network) onto `object` (the same curve

@@ -12,7 +12,7 @@ mod mirror;
 mod sharp;
 mod skinning;
 
-pub use align::{align_curves, transform_network, AlignOptions, Alignment};
+pub use align::{align_curves, quaternion_matrix, transform_network, AlignOptions, Alignment};
 pub use boundary::{insert_boundary, BoundaryOptions, BoundaryReport};
 pub use delete::{delete_stroke, DeleteReport};
 pub use error::{End, ToolError};
