@@ -11,6 +11,7 @@
 //! * [`solve`]: sparse Cholesky with symbolic reuse, fixed-value (Dirichlet) elimination and
 //!   stacked least squares (libigl's precompute/solve split);
 //! * [`subdivide`]: Loop subdivision;
+//! * [`surface`]: surfaces from curve networks (FIRESV1 and FIRESV2);
 //! * [`edit`]: differential mesh editing (Laplacian surface editing, Poisson gradient
 //!   editing, implicit Laplacian editing, naive Laplacian baseline, coating, transplanting,
 //!   denoising) and the normalised ARAP `detail_error`;
@@ -29,6 +30,7 @@ pub mod operators;
 pub mod render;
 pub mod solve;
 pub mod subdivide;
+pub mod surface;
 
 pub use geometry::Vec3;
 pub use mesh::SurfaceMesh;
