@@ -11,6 +11,7 @@ pub mod demo;
 pub mod denoise;
 pub mod edit;
 pub mod mesh;
+pub mod network;
 pub mod output;
 pub mod pivot;
 pub mod replay;

@@ -49,6 +49,8 @@ enum Command {
     Pivot(cli::pivot::PivotArgs),
     /// Inspect a mesh file: counts, topology and what reading it repaired (one JSON line).
     Mesh(cli::mesh::MeshArgs),
+    /// Build the curve network from strokes (or replay a sketch journal): network.json and a summary line.
+    Network(cli::network::NetworkArgs),
 }
 
 fn main() -> ExitCode {
@@ -63,6 +65,7 @@ fn main() -> ExitCode {
         Command::Track(args) => cli::track::run(args),
         Command::Pivot(args) => cli::pivot::run(args),
         Command::Mesh(args) => cli::mesh::run(args),
+        Command::Network(args) => cli::network::run(args),
         Command::Edit(args) => cli::edit::run(args),
         Command::Coat(args) => cli::coat::run(args),
         Command::Transplant(args) => cli::transplant::run(args),

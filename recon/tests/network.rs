@@ -461,3 +461,46 @@ fn a_closed_curve_round_a_crossing_splits_four_faces() {
     let lone: Vec<[f64; 3]> = ring.iter().map(|p| [p[0] + 0.05, p[1], p[2]]).collect();
     assert!(insert(&mut net, &lone).is_err());
 }
+
+/// A disc split by a vertical and a horizontal diameter (4 faces), and a straight curve through
+/// `(0, y0)` and `(x1, 0)`: it crosses the vertical diameter `y0` from the centre junction and the
+/// horizontal one `x1` from it.
+fn across_the_junction(
+    y0: f64,
+    x1: f64,
+) -> (
+    Network,
+    Result<fires_recon::network::tools::InsertReport, ToolError>,
+) {
+    let mut net = disc();
+    insert(&mut net, &vertical(0.0)).unwrap();
+    insert(&mut net, &chord(0.0, PI, 0.0)).unwrap();
+    assert_eq!(net.topology().faces, 4);
+    let (dx, dy) = (x1, -y0);
+    let (a, b) = (-0.105 / dx, 0.105 / dx);
+    let c = common::disc::line([a * dx, y0 + a * dy, Z], [b * dx, y0 + b * dy, Z], 0.002);
+    let r = insert(&mut net, &c);
+    (net, r)
+}
+
+#[test]
+fn a_curve_crossing_near_a_junction_keeps_its_crossings_where_snapping_would_break_rule_one() {
+    // 3 mm from the junction on one curve (within vertex snapping), 10 mm on the other: snapping the
+    // first would leave a piece from the junction to an edge at it; both crossings are kept instead.
+    let (net, r) = across_the_junction(0.003, 0.010);
+    let r = r.expect("inserted");
+    assert_eq!(r.snapped, 0);
+    assert_eq!(r.crossings, 2);
+    assert_eq!(net.topology().faces, 7);
+}
+
+#[test]
+fn a_curve_grazing_a_junction_passes_through_it() {
+    // 3 mm and 6 mm from the junction: the sliver between the crossings is shorter than twice the
+    // vertex snapping distance, so the curve passes through the junction.
+    let (net, r) = across_the_junction(0.003, 0.006);
+    let r = r.expect("inserted");
+    assert_eq!(r.snapped, 1);
+    assert_eq!(r.crossings, 1);
+    assert_eq!(net.topology().faces, 6);
+}

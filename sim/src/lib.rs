@@ -15,7 +15,7 @@ pub mod scenario;
 pub mod session;
 
 pub use scenario::{scenario, Scenario, SCENARIOS};
-pub use session::{run, run_scenario, SimOptions, SimSummary, HOST_ORIGIN_NS};
+pub use session::{run, run_scenario, true_strokes, SimOptions, SimSummary, HOST_ORIGIN_NS};
 
 /// Errors of the simulator.
 #[derive(Debug, thiserror::Error)]

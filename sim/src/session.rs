@@ -397,14 +397,44 @@ pub fn run(
     }
 
     // Strokes.
+    let strokes = true_strokes(&traj, duration_s);
+    summary.strokes = strokes.len();
+    if opts.truth {
+        w.write_strokes(&strokes)?;
+        let v = |x: V3| [x.x, x.y, x.z];
+        let s = &sc.imu.soft_iron;
+        w.write_world_truth(&WorldTruth {
+            gravity_world_mps2: v(sc.imu.gravity_world),
+            earth_field_world_t: v(sc.imu.earth_field_world),
+            hard_iron_t: v(sc.imu.hard_iron),
+            soft_iron: [
+                [s[(0, 0)], s[(0, 1)], s[(0, 2)]],
+                [s[(1, 0)], s[(1, 1)], s[(1, 2)]],
+                [s[(2, 0)], s[(2, 1)], s[(2, 2)]],
+            ],
+            accel_bias_mps2: v(sc.imu.accel_bias),
+            pen_clock_drift_ppm: sc.pen_clock_drift_ppm,
+            pen_clock_origin_ns: HOST_ORIGIN_NS
+                .saturating_sub(((sc.pen_boot_s / (1.0 + drift)) * 1e9).round() as u64),
+            disconnects: link.disconnects.clone(),
+            object: scene.map_or_else(|| "none".to_string(), |s| s.shape.describe()),
+        })?;
+    }
+    w.finish()?;
+    Ok(summary)
+}
+
+/// The strokes drawn in the first `duration_s` seconds of a drawing trajectory, as `truth/strokes.json`
+/// holds them: the true tip every 10 ms of drawing, and the topology the plan implies, restricted to the
+/// strokes drawn (a stroke cut off by the end of the session is `complete: false`).
+pub fn true_strokes(traj: &Trajectory, duration_s: f64) -> Vec<StrokeTruth> {
     let drawn: Vec<u32> = traj
         .stroke_times()
         .iter()
         .filter(|s| s.1 <= duration_s)
         .map(|s| traj.strokes()[s.0].id)
         .collect();
-    let strokes: Vec<StrokeTruth> = traj
-        .stroke_times()
+    traj.stroke_times()
         .iter()
         .filter(|s| s.1 <= duration_s)
         .map(|&(idx, t0, t1)| {
@@ -436,29 +466,5 @@ pub fn run(
                 tip_polyline_m,
             }
         })
-        .collect();
-    summary.strokes = strokes.len();
-    if opts.truth {
-        w.write_strokes(&strokes)?;
-        let v = |x: V3| [x.x, x.y, x.z];
-        let s = &sc.imu.soft_iron;
-        w.write_world_truth(&WorldTruth {
-            gravity_world_mps2: v(sc.imu.gravity_world),
-            earth_field_world_t: v(sc.imu.earth_field_world),
-            hard_iron_t: v(sc.imu.hard_iron),
-            soft_iron: [
-                [s[(0, 0)], s[(0, 1)], s[(0, 2)]],
-                [s[(1, 0)], s[(1, 1)], s[(1, 2)]],
-                [s[(2, 0)], s[(2, 1)], s[(2, 2)]],
-            ],
-            accel_bias_mps2: v(sc.imu.accel_bias),
-            pen_clock_drift_ppm: sc.pen_clock_drift_ppm,
-            pen_clock_origin_ns: HOST_ORIGIN_NS
-                .saturating_sub(((sc.pen_boot_s / (1.0 + drift)) * 1e9).round() as u64),
-            disconnects: link.disconnects.clone(),
-            object: scene.map_or_else(|| "none".to_string(), |s| s.shape.describe()),
-        })?;
-    }
-    w.finish()?;
-    Ok(summary)
+        .collect()
 }

@@ -3,5 +3,5 @@
 pub mod network;
 pub mod trajectory;
 
-pub use network::{plan_network, Curve, PlannedStroke, Scene};
+pub use network::{plan_network, Curve, PlannedStroke, Scene, MAX_PLANNED_STROKES};
 pub use trajectory::{min_jerk, FreeMotion, Pose, Trajectory};

@@ -122,8 +122,9 @@ impl Trajectory {
         let mut t = 0.0;
         let mut segs: Vec<Timed> = Vec::new();
         let mut stroke_times = Vec::new();
-        // Strokes are planned 24 at a time (about two minutes of drawing).
-        let mut strokes = crate::motion::plan_network(scene.rho, 24, rng);
+        // One planned network (about 40 s of drawing); a longer session rests after it.
+        let strokes =
+            crate::motion::plan_network(scene.rho, crate::motion::MAX_PLANNED_STROKES, rng);
         let mut traj = Trajectory {
             segs: Vec::new(),
             scene: Some(scene.clone()),
@@ -214,16 +215,6 @@ impl Trajectory {
             push(&mut segs, &mut t, t_draw, Segment::Draw(params));
             push(&mut segs, &mut t, rng.range(0.08, 0.2), Segment::Hold(end));
             prev_end = Some(end);
-            if used == strokes.len() && t < duration {
-                // Extremely long session: keep adding crossing curves of a fresh plan (same boundary id 0).
-                let more = crate::motion::plan_network(scene.rho, 24, rng);
-                let base = strokes.len() as u32;
-                strokes.extend(more.into_iter().skip(1).map(|mut s| {
-                    s.id += base - 1;
-                    s.crosses.clear();
-                    s
-                }));
-            }
         }
         traj.strokes = strokes;
         traj.segs = segs;

@@ -4,8 +4,11 @@
 //! * **Meeting points.** For each existing polyline the curve comes within the intersection threshold of,
 //!   the closest pair of points (see `crossings.rs`). The new vertex goes at the point on the old polyline,
 //!   so existing curves do not move; the new polyline's ends are set onto it.
-//! * **Vertex snapping.** A meeting point within the snapping distance of an end vertex of its edge is
-//!   moved onto that vertex and the edge is not split.
+//! * **Vertex snapping.** A meeting point within the vertex snapping distance of an end vertex of its
+//!   edge is moved onto that vertex and the edge is not split. Where that would make a piece break rule 1
+//!   (the curve met two curves near their junction and the next meeting is on an edge at it), the
+//!   meetings are taken where they are instead; a piece shorter than twice the vertex snapping distance
+//!   that rule 1 refuses is folded into one meeting point (see `merge_slivers`).
 //! * **Strokes as people draw them.** An end that stops short of the network by at most the snapping
 //!   distance is extended by a straight segment to the nearest network point; an end that overshoots the
 //!   first (last) crossing by at most `overshoot_mm` is trimmed there. Both are reported.
@@ -13,7 +16,8 @@
 //! * **Rule 2.** Consecutive meeting points must share a face: a curve that passes over another without
 //!   coming within the threshold, or leaves the surface, is refused.
 //!
-//! Thresholds default to 5 mm (intersection) and 8 mm (snapping), a few times the tracker's tip accuracy,
+//! Thresholds default to 5 mm (intersection), 8 mm (short stops) and 4 mm (vertex snapping), a few times
+//! the tracker's tip accuracy,
 //! and are widened to `sigma_factor · σ` when the stroke's own uncertainty σ is larger.
 //! Bookkeeping with both ends on edges, m crossings and no snapping: ΔV = m + 2, ΔE = 2m + 3, ΔF = m + 1.
 
@@ -30,8 +34,12 @@ use crate::network::{EdgeId, FaceId, Transaction, VertexId};
 pub struct InsertOptions {
     /// Two curves intersect where they come closer than this.
     pub intersect_mm: f64,
-    /// Meeting points this close to a vertex snap to it; ends this close to the network are extended to it.
+    /// Ends this close to the network are extended to it (short stops).
     pub snap_mm: f64,
+    /// Meeting points (crossings and ends) this close to an end vertex of their edge go onto that vertex.
+    /// Smaller than `snap_mm`: a curve crossing another this close to a junction is taken to pass through
+    /// it; the simulator's grid keeps its junctions 14 mm apart.
+    pub vertex_snap_mm: f64,
     /// Longest tail past the first or last crossing that is trimmed.
     pub overshoot_mm: f64,
     /// Thresholds are widened to this many times the stroke's σ when that is larger.
@@ -46,6 +54,7 @@ impl Default for InsertOptions {
         InsertOptions {
             intersect_mm: 5.0,
             snap_mm: 8.0,
+            vertex_snap_mm: 4.0,
             overshoot_mm: 30.0,
             sigma_factor: 3.0,
             close_mm: 10.0,
@@ -110,6 +119,7 @@ struct Ctx<'a> {
     near_ends: [Option<Hit>; 2],
     thr: f64,
     snap: f64,
+    vertex_snap: f64,
     over: f64,
     report: f64,
 }
@@ -136,6 +146,7 @@ pub fn insert_curve(
     }
     let thr = widened_m(options.intersect_mm, curve.sigma_mm, options.sigma_factor);
     let snap = widened_m(options.snap_mm, curve.sigma_mm, options.sigma_factor);
+    let vertex_snap = widened_m(options.vertex_snap_mm, curve.sigma_mm, options.sigma_factor);
     let mut arc = arcs(&pts);
     let (mut hits, mut near_ends) = find_hits(net, &pts, &arc, thr, snap);
     // A closed curve whose ends are not on the network starts and ends at its first crossing (thesis
@@ -175,6 +186,7 @@ pub fn insert_curve(
         near_ends,
         thr,
         snap,
+        vertex_snap,
         over: options.overshoot_mm * 1e-3,
         report: options.intersect_mm * 1e-3,
     };
@@ -187,18 +199,48 @@ pub fn insert_curve(
         // The loop closes on the very point it starts from.
         end.anchor = start.anchor;
     }
-    let mut stops = vec![start];
-    for h in &hits {
-        if h.sigma > start.sigma && h.sigma < end.sigma {
-            stops.push(ctx.stop_of(h, h.sigma));
+    // Meeting points snap to vertices; where that would make a piece break rule 1 (two curves met near
+    // their junction, both snapped onto it, and the next meeting is on an edge at that junction), the
+    // crossings are taken where they are instead: a small face rather than a refused stroke.
+    let mut stops = Vec::new();
+    for crossing_snap in [ctx.vertex_snap, 0.0] {
+        stops = vec![start];
+        for h in &hits {
+            if h.sigma > start.sigma && h.sigma < end.sigma {
+                stops.push(ctx.stop_at(h, crossing_snap));
+            }
+        }
+        stops.push(end);
+        // Consecutive stops on one vertex are one stop.
+        stops.dedup_by(|b, a| match (a.anchor, b.anchor) {
+            (Anchor::Vertex(x), Anchor::Vertex(y)) => x == y,
+            _ => false,
+        });
+        if crossing_snap == 0.0 {
+            // Unsnapped, a curve passing near a junction also comes within the threshold of the
+            // junction itself (the end of each edge there): that approach is not a crossing of its own
+            // when the curve crosses an edge at that junction next to it.
+            let mut k = 1;
+            while k + 1 < stops.len() {
+                let v = stops[k].anchor;
+                if matches!(v, Anchor::Vertex(_))
+                    && (ctx.breaks_rule_one(stops[k - 1].anchor, v)
+                        || ctx.breaks_rule_one(v, stops[k + 1].anchor))
+                {
+                    stops.remove(k);
+                } else {
+                    k += 1;
+                }
+            }
+        }
+        ctx.merge_slivers(&mut stops);
+        if stops
+            .windows(2)
+            .all(|w| !ctx.breaks_rule_one(w[0].anchor, w[1].anchor))
+        {
+            break;
         }
     }
-    stops.push(end);
-    // Consecutive stops on one vertex are one stop.
-    stops.dedup_by(|b, a| match (a.anchor, b.anchor) {
-        (Anchor::Vertex(x), Anchor::Vertex(y)) => x == y,
-        _ => false,
-    });
     let snapped = stops
         .iter()
         .filter(|s| matches!(s.anchor, Anchor::Vertex(_)))
@@ -233,6 +275,15 @@ impl Ctx<'_> {
     }
 
     fn stop_of(&self, h: &Hit, sigma: f64) -> Stop {
+        self.stop_with(h, sigma, self.vertex_snap)
+    }
+
+    /// An interior meeting point, snapped to a vertex within `snap`.
+    fn stop_at(&self, h: &Hit, snap: f64) -> Stop {
+        self.stop_with(h, h.sigma, snap)
+    }
+
+    fn stop_with(&self, h: &Hit, sigma: f64, snap: f64) -> Stop {
         let anchor = match self.net.edge(h.edge) {
             Some(ed) => {
                 let pos = |v| {
@@ -241,9 +292,9 @@ impl Ctx<'_> {
                         .map_or(f64::INFINITY, |x| gap(x.position, h.point))
                 };
                 let (df, dt) = (pos(ed.from), pos(ed.to));
-                if df <= self.snap && df <= dt {
+                if df <= snap && df <= dt {
                     Anchor::Vertex(ed.from)
-                } else if dt <= self.snap {
+                } else if dt <= snap {
                     Anchor::Vertex(ed.to)
                 } else {
                     Anchor::Edge {
@@ -326,6 +377,53 @@ impl Ctx<'_> {
             distance_mm: distance * 1e3,
             limit_mm: self.snap * 1e3,
         })
+    }
+
+    /// Whether the piece between two stops breaks rule 1.
+    fn breaks_rule_one(&self, a: Anchor, b: Anchor) -> bool {
+        self.check_rule_one(a, b).is_err()
+    }
+
+    /// Folds the slivers rule 1 would refuse into one meeting point: a piece shorter than twice the
+    /// snapping distance between a vertex and an edge at it, or between two meetings with one edge, is
+    /// a curve drawn across a junction (it meets both curves there, one of them snapped to the junction)
+    /// or one that grazes a curve and comes back. The curve passes through the vertex, or does not cross
+    /// the grazed curve at all; a longer such piece is still refused. An end is kept where it can be.
+    fn merge_slivers(&self, stops: &mut Vec<Stop>) {
+        let short = |a: &Stop, b: &Stop| {
+            b.sigma.clamp(0.0, self.total) - a.sigma.clamp(0.0, self.total)
+                <= 2.0 * self.vertex_snap
+        };
+        let mut i = 0;
+        while i + 1 < stops.len() {
+            let (a, b) = (stops[i], stops[i + 1]);
+            if !(self.breaks_rule_one(a.anchor, b.anchor) && short(&a, &b)) {
+                i += 1;
+                continue;
+            }
+            let last = stops.len() - 1;
+            match (a.anchor, b.anchor) {
+                (Anchor::Vertex(_), _) => {
+                    stops.remove(i + 1);
+                }
+                (_, Anchor::Vertex(_)) => {
+                    stops.remove(i);
+                }
+                _ if i == 0 => {
+                    stops.remove(1);
+                }
+                _ if i + 1 == last => {
+                    stops.remove(i);
+                }
+                _ => {
+                    stops.drain(i..i + 2);
+                }
+            }
+            if stops.len() < 2 {
+                return;
+            }
+            i = i.saturating_sub(1);
+        }
     }
 
     fn check_rule_one(&self, a: Anchor, b: Anchor) -> Result<(), ToolError> {
