@@ -12,9 +12,17 @@
 //! from a network (from_network.rs).
 
 mod control;
+mod coons;
 mod error;
 mod from_network;
+mod nuliss;
+mod refine;
+mod triquad;
 
 pub use control::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};
+pub use coons::{chord_params, span_points, CoonsPatch, Side};
 pub use error::SurfaceError;
 pub use from_network::base_mesh;
+pub use nuliss::{nuliss_mod, nuliss_mod_n, NulissOptions};
+pub use refine::{refine, refine_step, RefineOptions};
+pub use triquad::{triquadrify, TriquadOptions};
