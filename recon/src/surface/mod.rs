@@ -10,6 +10,11 @@
 //!
 //! [`ControlMesh`] is the one type every stage passes on (control.rs).
 
+mod catmull_clark;
 mod control;
 
+pub use catmull_clark::{
+    catmull_clark, catmull_clark_n, curve_target, limit_positions, CatmullClarkError,
+    CatmullClarkOptions, CurveKeeping,
+};
 pub use control::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};
