@@ -8,13 +8,18 @@
 //! * **FIRESV2** (§6.4): a Catmull-Clark-topology tessellation of every face, the two-step surface-diffusion
 //!   flow under the curve constraints, then Catmull-Clark with sharp rules.
 //!
-//! [`ControlMesh`] is the one type every stage passes on (control.rs).
+//! [`ControlMesh`] is the one type every stage passes on (control.rs); [`base_mesh`] makes the first one
+//! from a network (from_network.rs).
 
 mod catmull_clark;
 mod control;
+mod error;
+mod from_network;
 
 pub use catmull_clark::{
     catmull_clark, catmull_clark_n, curve_target, limit_positions, CatmullClarkError,
     CatmullClarkOptions, CurveKeeping,
 };
 pub use control::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};
+pub use error::SurfaceError;
+pub use from_network::base_mesh;

@@ -1,0 +1,84 @@
+//! Curve networks built from generated polygon meshes: one network vertex per mesh vertex, one edge per
+//! mesh edge (its polyline sampled from a caller's curve), one face per polygon (same orientation).
+
+#![allow(dead_code)]
+
+use std::collections::HashMap;
+
+use fires_recon::network::{Network, NetworkFile, PolylineAttrs};
+use serde_json::{json, Value};
+
+/// The network of polygons `faces` over `points`; `polyline(a, b)` gives the points of the edge from
+/// vertex `a` to vertex `b` (`a < b`; its ends are set to the two positions) and `sharpness(a, b)` its
+/// sharpness.
+pub fn network_from_polygons(
+    points: &[[f64; 3]],
+    faces: &[Vec<usize>],
+    polyline: impl Fn(usize, usize) -> Vec<[f64; 3]>,
+    sharpness: impl Fn(usize, usize) -> f64,
+) -> Network {
+    let mut edge_of: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut edges: Vec<Value> = Vec::new();
+    let mut polylines: Vec<Value> = Vec::new();
+    let mut vedges: Vec<Vec<usize>> = vec![Vec::new(); points.len()];
+    let mut frecs = Vec::new();
+    for (fi, f) in faces.iter().enumerate() {
+        let mut uses = Vec::new();
+        for k in 0..f.len() {
+            let (a, b) = (f[k], f[(k + 1) % f.len()]);
+            let key = (a.min(b), a.max(b));
+            let ei = *edge_of.entry(key).or_insert_with(|| {
+                let id = edges.len();
+                let mut pts = polyline(key.0, key.1);
+                pts[0] = points[key.0];
+                let n = pts.len();
+                pts[n - 1] = points[key.1];
+                let attrs = PolylineAttrs {
+                    sharpness: sharpness(key.0, key.1),
+                    ..PolylineAttrs::default()
+                };
+                let mut rec = serde_json::to_value(attrs).unwrap();
+                rec["id"] = json!(id);
+                rec["points"] = json!(pts);
+                polylines.push(rec);
+                edges.push(
+                    json!({"id": id, "from": key.0, "to": key.1, "polyline": id, "faces": []}),
+                );
+                vedges[key.0].push(id);
+                vedges[key.1].push(id);
+                id
+            });
+            edges[ei]["faces"].as_array_mut().unwrap().push(json!(fi));
+            uses.push(json!({"edge": ei, "reversed": a > b}));
+        }
+        frecs.push(json!({"id": fi, "edges": uses}));
+    }
+    let mut file = serde_json::to_value(NetworkFile::from_network(&Network::new())).unwrap();
+    file["slots"] = json!([points.len(), edges.len(), faces.len(), polylines.len()]);
+    file["vertices"] = Value::Array(
+        points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| json!({"id": i, "p": p, "edges": vedges[i]}))
+            .collect(),
+    );
+    file["polylines"] = Value::Array(polylines);
+    file["edges"] = Value::Array(edges);
+    file["faces"] = Value::Array(frecs);
+    let file: NetworkFile = serde_json::from_value(file).unwrap();
+    file.to_network().expect("generated network is valid")
+}
+
+/// Straight polyline from `a` to `b` with `n` segments.
+pub fn straight(a: [f64; 3], b: [f64; 3], n: usize) -> Vec<[f64; 3]> {
+    (0..=n)
+        .map(|i| {
+            let t = i as f64 / n as f64;
+            [
+                a[0] + t * (b[0] - a[0]),
+                a[1] + t * (b[1] - a[1]),
+                a[2] + t * (b[2] - a[2]),
+            ]
+        })
+        .collect()
+}
