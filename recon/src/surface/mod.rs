@@ -11,6 +11,7 @@
 //! [`ControlMesh`] is the one type every stage passes on (control.rs); [`base_mesh`] makes the first one
 //! from a network (from_network.rs).
 
+mod catmull_clark;
 mod control;
 mod coons;
 mod error;
@@ -19,6 +20,10 @@ mod nuliss;
 mod refine;
 mod triquad;
 
+pub use catmull_clark::{
+    catmull_clark, catmull_clark_n, curve_target, limit_positions, CatmullClarkError,
+    CatmullClarkOptions, CurveKeeping,
+};
 pub use control::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};
 pub use coons::{chord_params, span_points, CoonsPatch, Side};
 pub use error::SurfaceError;
