@@ -19,6 +19,7 @@ mod from_network;
 mod nuliss;
 mod refine;
 mod triquad;
+mod v1;
 
 pub use catmull_clark::{
     catmull_clark, catmull_clark_n, curve_target, limit_positions, CatmullClarkError,
@@ -31,3 +32,4 @@ pub use from_network::base_mesh;
 pub use nuliss::{nuliss_mod, nuliss_mod_n, NulissOptions};
 pub use refine::{refine, refine_step, RefineOptions};
 pub use triquad::{triquadrify, TriquadOptions};
+pub use v1::{reconstruct_v1, refined_v1, subdivide_v1, V1Options};

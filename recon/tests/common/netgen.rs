@@ -82,3 +82,58 @@ pub fn straight(a: [f64; 3], b: [f64; 3], n: usize) -> Vec<[f64; 3]> {
         })
         .collect()
 }
+
+/// A coarse quad grid over a parametric surface `f(s, t)`, (s, t) in [0, 1]², `ns × nt` quads (wrapped in
+/// s and/or t when `wrap`), its network with every edge's polyline sampled from `f` along the straight
+/// parameter segment (`samples` segments per edge).
+pub fn parametric_network(
+    f: &dyn Fn(f64, f64) -> [f64; 3],
+    ns: usize,
+    nt: usize,
+    wrap: (bool, bool),
+    samples: usize,
+) -> Network {
+    let (cs, ct) = (
+        if wrap.0 { ns } else { ns + 1 },
+        if wrap.1 { nt } else { nt + 1 },
+    );
+    let idx = |i: usize, j: usize| (i % cs) + cs * (j % ct);
+    let mut uv = Vec::new();
+    let mut pts = Vec::new();
+    for j in 0..ct {
+        for i in 0..cs {
+            let (s, t) = (i as f64 / ns as f64, j as f64 / nt as f64);
+            uv.push((s, t));
+            pts.push(f(s, t));
+        }
+    }
+    let mut faces = Vec::new();
+    for j in 0..nt {
+        for i in 0..ns {
+            faces.push(vec![idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)]);
+        }
+    }
+    // Parameters of each edge's ends, unwrapped so the segment is short.
+    let uv2 = uv.clone();
+    network_from_polygons(
+        &pts,
+        &faces,
+        move |a, b| {
+            let (pa, mut pb) = (uv2[a], uv2[b]);
+            let step = (1.0 / ns as f64, 1.0 / nt as f64);
+            if (pb.0 - pa.0).abs() > 1.5 * step.0 {
+                pb.0 += if pb.0 < pa.0 { 1.0 } else { -1.0 };
+            }
+            if (pb.1 - pa.1).abs() > 1.5 * step.1 {
+                pb.1 += if pb.1 < pa.1 { 1.0 } else { -1.0 };
+            }
+            (0..=samples)
+                .map(|k| {
+                    let w = k as f64 / samples as f64;
+                    f(pa.0 + w * (pb.0 - pa.0), pa.1 + w * (pb.1 - pa.1))
+                })
+                .collect()
+        },
+        |_, _| 0.0,
+    )
+}
