@@ -614,3 +614,56 @@ fn v1_reconstructs_known_surfaces_within_half_a_percent_of_the_diagonal() {
         assert!(fwd.max(*back) <= 0.005 * dg, "{name}");
     }
 }
+
+// ----- basic refinement, networks from the sketching tools ------------------------------------------
+
+use fires_recon::surface::{refine, RefineOptions};
+
+#[test]
+fn basic_refinement_gives_quads_with_every_vertex_on_a_polyline() {
+    for n in [4, 5, 7] {
+        let tq = triquadrify(&base_mesh(&ngon_network(n)).unwrap(), &TriquadOptions::default())
+            .unwrap();
+        let (q, t) = tq.mesh.faces().fold((0, 0), |(q, t), f| {
+            if tq.mesh.face_valence(f) == 4 {
+                (q + 1, t)
+            } else {
+                (q, t + 1)
+            }
+        });
+        for (steps, match_density) in [(1, true), (2, true), (2, false), (3, true)] {
+            let r = refine(&tq, &RefineOptions { steps, match_density }).unwrap();
+            assert!(r.mesh.faces().all(|f| r.mesh.face_valence(f) == 4));
+            let p = 4usize.pow(steps as u32);
+            assert_eq!(r.mesh.n_faces(), q * p + t * 3 * p / 4, "{n}-gon, {steps} steps");
+            assert!(r.mesh.edges().all(|e| r.span(e).is_some()), "every edge follows a polyline");
+            assert_spans_on_curves(&r, 1e-12);
+        }
+    }
+}
+
+#[test]
+fn a_disc_sketched_with_the_tools_reconstructs_flat() {
+    use common::disc::{vertical, Z};
+    use fires_recon::network::tools::{insert_curve, InsertOptions};
+    let mut net = Network::new();
+    insert_boundary(&mut net, CurveInput::new(&circle(400)), &BoundaryOptions::default()).unwrap();
+    for x in [-0.05, 0.0, 0.05] {
+        insert_curve(&mut net, CurveInput::new(&vertical(x)), &InsertOptions::default()).unwrap();
+    }
+    let s = reconstruct_v1(&net, &V1Options::default()).unwrap();
+    assert!(s.mesh.faces().all(|f| s.mesh.face_valence(f) == 4));
+    let worst = s
+        .mesh
+        .vertices()
+        .map(|x| (s.mesh.position(x).z - Z).abs())
+        .fold(0.0, f64::max);
+    assert!(worst <= 1e-9 * 0.2, "off-plane {worst}");
+    // The drawn curves are kept: every curve vertex is on its curve.
+    for x in s.mesh.vertices() {
+        if let VertexTag::OnCurve(p) = s.tag(x) {
+            let d = (s.mesh.position(x) - s.curves[p.curve].point_at(p.t)).norm();
+            assert!(d <= 1e-12, "curve vertex {x} is {d} m off");
+        }
+    }
+}
