@@ -8,8 +8,28 @@
 //! * **FIRESV2** (§6.4): a Catmull-Clark-topology tessellation of every face, the two-step surface-diffusion
 //!   flow under the curve constraints, then Catmull-Clark with sharp rules.
 //!
-//! [`ControlMesh`] is the one type every stage passes on (control.rs).
+//! [`ControlMesh`] is the one type every stage passes on (control.rs); [`base_mesh`] makes the first one
+//! from a network (from_network.rs).
 
+mod catmull_clark;
 mod control;
+mod coons;
+mod error;
+mod from_network;
+mod nuliss;
+mod refine;
+mod triquad;
+mod v1;
 
+pub use catmull_clark::{
+    catmull_clark, catmull_clark_n, curve_target, limit_positions, CatmullClarkError,
+    CatmullClarkOptions, CurveKeeping,
+};
 pub use control::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};
+pub use coons::{chord_params, span_points, CoonsPatch, Side};
+pub use error::SurfaceError;
+pub use from_network::base_mesh;
+pub use nuliss::{nuliss_mod, nuliss_mod_n, NulissOptions};
+pub use refine::{refine, refine_step, RefineOptions};
+pub use triquad::{triquadrify, TriquadOptions};
+pub use v1::{reconstruct_v1, refined_v1, subdivide_v1, V1Options};
