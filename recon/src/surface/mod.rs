@@ -13,13 +13,21 @@
 
 mod catmull_clark;
 mod control;
+mod diffusion;
 mod error;
 mod from_network;
+mod quad_cotan;
+mod tessellate;
+mod v2;
 
 pub use catmull_clark::{
-    catmull_clark, catmull_clark_n, curve_target, limit_positions, CatmullClarkError,
+    catmull_clark, catmull_clark_n, curve_target, interpolating_control, limit_positions,
     CatmullClarkOptions, CurveKeeping,
 };
 pub use control::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};
+pub use diffusion::{surface_diffusion, CurvatureField, DiffusionOptions, SurfaceDiffusion};
 pub use error::SurfaceError;
 pub use from_network::base_mesh;
+pub use quad_cotan::{vertex_normals_at, QuadCotan};
+pub use tessellate::{tessellate, tessellate_step, TessellateOptions};
+pub use v2::{reconstruct_v2, reconstruct_v2_from_base, subdivide, v2_refined, V2Options};
