@@ -106,6 +106,7 @@ enum Step2 {
 pub struct SurfaceDiffusion {
     opts: DiffusionOptions,
     c: ControlMesh,
+    centre: Vec3,
     x0: Vec<Vec3>,
     constrained: Vec<usize>,
     sharp_count: Vec<f64>,
@@ -138,6 +139,10 @@ impl SurfaceDiffusion {
         if x0.iter().any(|p| !p.is_finite()) {
             return Err(SurfaceError::Degenerate("non-finite vertex".into()));
         }
+        // Solve about the centroid: the operators annihilate translations, and small coordinates keep the
+        // normal equations' rounding small (a plane at z = 0.5 m stays flat to 1e-12 m, not 1e-9 m).
+        let centre = x0.iter().fold(Vec3::ZERO, |s, &p| s + p) / x0.len().max(1) as f64;
+        let x0: Vec<Vec3> = x0.into_iter().map(|p| p - centre).collect();
         let sharp_count: Vec<f64> = m.vertices().map(|v| c.sharp_valence(v) as f64).collect();
         let mean_edge = if m.n_edges() > 0 {
             m.edges().map(|e| m.edge_length(e)).sum::<f64>() / m.n_edges() as f64
@@ -165,6 +170,7 @@ impl SurfaceDiffusion {
         Ok(Self {
             opts: *opts,
             c: c.clone(),
+            centre,
             x0,
             constrained,
             sharp_count,
@@ -261,7 +267,9 @@ impl SurfaceDiffusion {
             }
         }
         let mut out = self.c.clone();
-        out.mesh.positions_mut().copy_from_slice(&x);
+        for (q, p) in out.mesh.positions_mut().iter_mut().zip(&x) {
+            *q = *p + self.centre;
+        }
         Ok(out)
     }
 }
