@@ -211,7 +211,10 @@ fn surface_distance_is_euclidean_to_a_micrometre_near_the_surface() {
                 (d - want).abs() <= 1e-6,
                 "{kind:?} point {i}: distance {d} vs brute force {want}"
             );
-            assert!(shape.sdf(&q).abs() < 1e-9, "{kind:?}: closest point off the surface");
+            assert!(
+                shape.sdf(&q).abs() < 1e-9,
+                "{kind:?}: closest point off the surface"
+            );
             assert!(((q - p).norm() - d).abs() < 1e-6, "{kind:?}");
         }
         eprintln!("{kind:?}: worst |distance - brute force| = {worst:.2e} m");
@@ -249,7 +252,10 @@ fn the_drawn_region_is_the_lifted_grid_inside_the_boundary() {
     );
     for p in &region {
         assert!(scene.shape.distance(p) < 1e-9);
-        assert!(scene.shape.normal(p).dot(&scene.view) < 0.0, "facing the cameras");
+        assert!(
+            scene.shape.normal(p).dot(&scene.view) < 0.0,
+            "facing the cameras"
+        );
         let uv = scene.project(p);
         assert!(uv[0].hypot(uv[1]) <= r + 1e-12);
         // On the plane grid.

@@ -8,8 +8,14 @@
 //! * **FIRESV2** (§6.4): a Catmull-Clark-topology tessellation of every face, the two-step surface-diffusion
 //!   flow under the curve constraints, then Catmull-Clark with sharp rules.
 //!
-//! [`ControlMesh`] is the one type every stage passes on (control.rs).
+//! [`ControlMesh`] is the one type every stage passes on (control.rs); [`compare_surface`] measures a surface
+//! against the true object (compare.rs).
 
+mod compare;
 mod control;
 
+pub use compare::{
+    compare_surface, sample_triangles, CompareError, CompareOptions, SurfaceComparison,
+    COMPLETENESS_THRESHOLD_M,
+};
 pub use control::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};

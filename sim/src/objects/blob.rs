@@ -108,7 +108,11 @@ impl Blob {
             // Gradient and Hessian of f / 2.
             let g = [ja.dot(&res), jb.dot(&res)];
             let gn = [ja.dot(&ja), ja.dot(&jb), jb.dot(&jb)];
-            let newton = [gn[0] + saa.dot(&res), gn[1] + sab.dot(&res), gn[2] + sbb.dot(&res)];
+            let newton = [
+                gn[0] + saa.dot(&res),
+                gn[1] + sab.dot(&res),
+                gn[2] + sbb.dot(&res),
+            ];
             let step = solve_2x2(newton, g).or_else(|| solve_2x2(gn, g));
             let Some(mut delta) = step else { break };
             // Descent direction required; otherwise use Gauss-Newton's, which always is one.
@@ -200,5 +204,8 @@ fn solve_2x2(m: [f64; 3], b: [f64; 2]) -> Option<[f64; 2]> {
     if !(m[0] > 0.0 && det > 1e-300 * (m[0] * m[2]).abs().max(1e-300)) || !det.is_finite() {
         return None;
     }
-    Some([(m[2] * b[0] - m[1] * b[1]) / det, (m[0] * b[1] - m[1] * b[0]) / det])
+    Some([
+        (m[2] * b[0] - m[1] * b[1]) / det,
+        (m[0] * b[1] - m[1] * b[0]) / det,
+    ])
 }
