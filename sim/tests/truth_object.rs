@@ -196,7 +196,7 @@ fn surface_distance_is_euclidean_to_a_micrometre_near_the_surface() {
                 radial_point(shape.as_ref(), u)
             }
         };
-        let points = if kind == ObjectKind::Blob { 30 } else { 10 };
+        let points = if kind == ObjectKind::Blob { 60 } else { 10 };
         let mut worst: f64 = 0.0;
         for i in 0..points {
             let on = surf(&unit(&mut rng));

@@ -12,8 +12,11 @@
 use super::{Shape, V3};
 use fires_record::ObjectTruth;
 
-/// Rings of the cone sampling (the cone's axis plus this many rings).
+/// Most rings of the cone sampling (the cone's axis plus up to this many rings).
 const RINGS: usize = 8;
+/// Largest angle between rings, radians: far below the blob's shortest angular wavelength (2 pi / 5), so
+/// every basin of the distance is sampled.
+const RING_STEP: f64 = 0.04;
 /// Samples refined by Newton's method (the best ones of the cone sampling).
 const STARTS: usize = 3;
 /// Newton iterations per start.
@@ -53,8 +56,10 @@ impl Blob {
         };
         let (t1, t2) = tangent_basis(&axis);
         let mut samples: Vec<(f64, V3)> = vec![(d0, axis)];
-        let step = half_angle / RINGS as f64;
-        for k in 1..=RINGS {
+        let rings = ((half_angle / RING_STEP).ceil() as usize).clamp(1, RINGS);
+        let step = half_angle / rings as f64;
+        let near = (1.5 * step).cos();
+        for k in 1..=rings {
             let theta = step * k as f64;
             let count = ((std::f64::consts::TAU * theta.sin() / step).ceil() as usize).max(6);
             for j in 0..count {
@@ -68,7 +73,7 @@ impl Blob {
         let mut starts: Vec<V3> = Vec::new();
         for (_, u) in &samples {
             // Distinct basins: skip a start next to one already taken.
-            if starts.iter().all(|s| s.dot(u) < (1.5 * step).cos()) {
+            if starts.iter().all(|s| s.dot(u) < near) {
                 starts.push(*u);
             }
             if starts.len() == STARTS {
@@ -87,16 +92,21 @@ impl Blob {
     }
 
     /// Damped Newton descent of `|S(u) - p|^2` from the direction `u0`; returns the surface point reached.
+    /// Works relative to the centre, so rounding stays at the scale of the radius.
     fn newton(&self, p: &V3, u0: V3) -> V3 {
-        let f = |u: &V3| (self.surface_point(u) - p).norm_squared();
+        let pc = p - self.centre;
+        let local = |u: &V3| u * self.radius_towards(u);
+        let f = |u: &V3| (local(u) - pc).norm_squared();
         let mut u = u0;
         let mut fu = f(&u);
         let h = 1e-5;
+        // Stop once a step moves the point by less than 0.1 nm.
+        let tiny = 1e-10 / self.radius;
         for _ in 0..NEWTON_ITERATIONS {
             let (t1, t2) = tangent_basis(&u);
             let chart = |a: f64, b: f64| (u + t1 * a + t2 * b).normalize();
-            let s = |a: f64, b: f64| self.surface_point(&chart(a, b));
-            let s0 = self.surface_point(&u);
+            let s = |a: f64, b: f64| local(&chart(a, b));
+            let s0 = local(&u);
             let (sp0, sm0, s0p, s0m) = (s(h, 0.0), s(-h, 0.0), s(0.0, h), s(0.0, -h));
             let (spp, smm, spm, smp) = (s(h, h), s(-h, -h), s(h, -h), s(-h, h));
             let ja = (sp0 - sm0) / (2.0 * h);
@@ -104,15 +114,11 @@ impl Blob {
             let saa = (sp0 - s0 * 2.0 + sm0) / (h * h);
             let sbb = (s0p - s0 * 2.0 + s0m) / (h * h);
             let sab = (spp - spm - smp + smm) / (4.0 * h * h);
-            let res = s0 - p;
+            let res = s0 - pc;
             // Gradient and Hessian of f / 2.
             let g = [ja.dot(&res), jb.dot(&res)];
             let gn = [ja.dot(&ja), ja.dot(&jb), jb.dot(&jb)];
-            let newton = [
-                gn[0] + saa.dot(&res),
-                gn[1] + sab.dot(&res),
-                gn[2] + sbb.dot(&res),
-            ];
+            let newton = [gn[0] + saa.dot(&res), gn[1] + sab.dot(&res), gn[2] + sbb.dot(&res)];
             let step = solve_2x2(newton, g).or_else(|| solve_2x2(gn, g));
             let Some(mut delta) = step else { break };
             // Descent direction required; otherwise use Gauss-Newton's, which always is one.
@@ -122,9 +128,13 @@ impl Blob {
                     None => break,
                 }
             }
+            let size = delta[0].abs() + delta[1].abs();
+            if size < tiny {
+                break;
+            }
             let mut alpha = 1.0;
             let mut moved = false;
-            for _ in 0..40 {
+            for _ in 0..30 {
                 let cand = chart(-alpha * delta[0], -alpha * delta[1]);
                 let fc = f(&cand);
                 if fc < fu {
@@ -135,8 +145,7 @@ impl Blob {
                 }
                 alpha *= 0.5;
             }
-            let size = alpha * (delta[0].abs() + delta[1].abs());
-            if !moved || size < 1e-14 {
+            if !moved || alpha * size < tiny {
                 break;
             }
         }
