@@ -33,13 +33,13 @@ pub use meta::{
     PenGeometry, RigCalibration, Source, UndistortError, FORMAT_MAJOR, FORMAT_NAME, FORMAT_VERSION,
 };
 pub use reader::{FrameImage, RecordingReader};
-pub use report::{ReplayReport, Report, REPORT_FORMAT, REPORT_VERSION};
+pub use report::{ReplayReport, Report, SurfaceReport, REPORT_FORMAT, REPORT_VERSION};
 pub use strokes::{
     Stroke, StrokePiece, StrokePoint, StrokesError, StrokesFile, STROKES_FORMAT, STROKES_VERSION,
 };
 pub use truth::{
-    ExposureTruth, ImuTruth, Interval, LedTruth, PacketFate, PacketTruth, PoseTruth, StrokeKind,
-    StrokeTruth, Visibility, WorldTruth,
+    ExposureTruth, ImuTruth, Interval, LedTruth, ObjectTruth, PacketFate, PacketTruth, PoseTruth,
+    SceneTruth, StrokeKind, StrokeTruth, TargetTruth, Visibility, WorldTruth,
 };
 pub use validate::{MetaProblem, MIN_BASELINE_M};
 pub use writer::{RecordingWriter, WriterOptions};

@@ -93,6 +93,38 @@ pub struct ReplayReport {
     /// Why stereo pairs gave no vision tip, per reason.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vision_refusals: Option<VisionRefusals>,
+    // -- Surface figures (issue 15, item 5). --
+    /// The surface reconstructed from the tracked strokes against the true object (with ground truth).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface: Option<SurfaceReport>,
+    /// The same for a surface reconstructed from the true strokes (`truth/strokes.json`): the reconstruction's
+    /// own error, without the tracking's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface_from_truth: Option<SurfaceReport>,
+}
+
+/// A reconstructed surface against the true object (docs/report.md, "Surface").
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SurfaceReport {
+    /// Reconstruction method: "v1" or "v2".
+    pub method: String,
+    /// Vertices of the final surface mesh.
+    pub vertices: usize,
+    /// RMS distance of area-uniform surface samples from the true object's surface, millimetres.
+    pub rms_mm: f64,
+    /// 95th percentile of the same distances, millimetres.
+    pub p95_mm: f64,
+    /// Symmetric Hausdorff distance: the larger of the farthest surface sample from the object and the farthest
+    /// sample of the true drawn region from the surface, millimetres.
+    pub hausdorff_mm: f64,
+    /// Diagonal of the bounding box of the true drawn region, millimetres.
+    pub diag_mm: f64,
+    /// `rms_mm` as a percentage of `diag_mm`.
+    pub rms_pct_diag: f64,
+    /// Fraction of the true drawn region's samples within 3 mm of the surface.
+    pub completeness_3mm: f64,
+    /// RMS distance of the network's curve points from the surface, millimetres (`null` without curve points).
+    pub curve_rms_mm: Option<f64>,
 }
 
 /// The live display of the tip: its filter and, with ground truth, how well it follows the pen.

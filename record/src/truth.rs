@@ -178,4 +178,85 @@ pub struct WorldTruth {
     pub disconnects: Vec<Interval>,
     /// Target object description (free text, e.g. `sphere r=0.100 at [..]`).
     pub object: String,
+    /// The target object as data (kind, pose, size, shape parameters) and the scene the strokes were planned
+    /// in; absent in recordings written before it existed and in sessions without an object.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target: Option<TargetTruth>,
+}
+
+/// The target object and the drawing scene (`target` in `truth/world.json`; docs/recording.md).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TargetTruth {
+    /// The object's geometry.
+    pub object: ObjectTruth,
+    /// The parameter plane the simulator planned the strokes in.
+    pub scene: SceneTruth,
+}
+
+/// A target object's geometry, tagged by `kind`; every length in metres, every direction a unit vector in the
+/// world frame. The formulas are the simulator's (`sim/src/objects/`), repeated in docs/recording.md.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum ObjectTruth {
+    /// `|p - centre| = radius`.
+    Sphere {
+        /// Centre, metres.
+        centre_m: [f64; 3],
+        /// Radius, metres.
+        radius_m: f64,
+    },
+    /// A solid cylinder with flat caps: radial distance from the axis `radius`, axial `|h| <= half_length`.
+    Cylinder {
+        /// Centre of the axis segment, metres.
+        centre_m: [f64; 3],
+        /// Unit axis direction.
+        axis: [f64; 3],
+        /// Radius, metres.
+        radius_m: f64,
+        /// Half the length along the axis, metres.
+        half_length_m: f64,
+    },
+    /// A box with rounded edges: the box of half extents `half_extents - rounding` grown by a ball of radius
+    /// `rounding`, turned by `yaw` about `up` (box axes: y = -up, z = world z made perpendicular to y, x = y × z,
+    /// then the yaw about y).
+    RoundedBox {
+        /// Centre, metres.
+        centre_m: [f64; 3],
+        /// Half extents along the box axes, including the rounding, metres.
+        half_extents_m: [f64; 3],
+        /// Edge rounding radius, metres.
+        rounding_m: f64,
+        /// World up (unit; the box's local y is `-up`).
+        up: [f64; 3],
+        /// Turn about the box's local y axis, radians.
+        yaw_rad: f64,
+    },
+    /// A star-shaped blob: in the direction `u` from the centre the surface lies at
+    /// `R(u) = mean_radius (1 + 0.12 sin(3 u_x + 1) sin(2 u_y) + 0.08 cos(4 u_z - 0.5) + 0.06 sin(5 u_x u_y))`.
+    Blob {
+        /// Centre, metres.
+        centre_m: [f64; 3],
+        /// Mean radius, metres.
+        mean_radius_m: f64,
+    },
+}
+
+/// The parameter plane of the drawing (the simulator's `Scene`): plane point `(u, v)` lies under the world
+/// point `origin + u e1 + v e2`, and is lifted onto the object by a ray along `view`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SceneTruth {
+    /// Unit viewing direction, from the cameras into the scene.
+    pub view: [f64; 3],
+    /// First in-plane axis (unit, perpendicular to `view`).
+    pub e1: [f64; 3],
+    /// Second in-plane axis (unit, `e1 = e2 × view`).
+    pub e2: [f64; 3],
+    /// Origin of the plane, metres (the centre of the object's bounding sphere).
+    pub origin_m: [f64; 3],
+    /// Radius of the planning disc in the plane, metres.
+    pub rho_m: f64,
+    /// Where the user's eye is, metres (the mean of the camera centres; the pen leans towards it).
+    pub eye_m: [f64; 3],
+    /// World up (unit).
+    pub up: [f64; 3],
 }

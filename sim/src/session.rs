@@ -418,6 +418,7 @@ pub fn run(
                 .saturating_sub(((sc.pen_boot_s / (1.0 + drift)) * 1e9).round() as u64),
             disconnects: link.disconnects.clone(),
             object: scene.map_or_else(|| "none".to_string(), |s| s.shape.describe()),
+            target: scene.map(|s| s.to_truth()),
         })?;
     }
     w.finish()?;

@@ -237,6 +237,8 @@ pub fn replay_report(
         strokes_floor: None,
         strokes_floor_summary: None,
         vision_refusals: None,
+        surface: None,
+        surface_from_truth: None,
     };
     report.vision_refusals = Some(super::refusals::vision_refusals(
         out,

@@ -9,9 +9,11 @@
 //!   flow under the curve constraints, then Catmull-Clark with sharp rules.
 //!
 //! [`ControlMesh`] is the one type every stage passes on (control.rs); [`base_mesh`] makes the first one
-//! from a network (from_network.rs).
+//! from a network (from_network.rs); [`compare_surface`] measures a surface against the true object
+//! (compare.rs).
 
 mod catmull_clark;
+mod compare;
 mod control;
 mod coons;
 mod diffusion;
@@ -28,6 +30,10 @@ mod v2;
 pub use catmull_clark::{
     catmull_clark, catmull_clark_n, curve_target, interpolating_control, limit_positions,
     CatmullClarkOptions, CurveKeeping,
+};
+pub use compare::{
+    compare_surface, sample_triangles, CompareError, CompareOptions, SurfaceComparison,
+    COMPLETENESS_THRESHOLD_M,
 };
 pub use control::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};
 pub use coons::{chord_params, span_points, CoonsPatch, Side};

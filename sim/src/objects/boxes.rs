@@ -2,6 +2,7 @@
 //! edge moves smoothly).
 
 use super::{Shape, V3};
+use fires_record::ObjectTruth;
 use nalgebra::{Rotation3, Vector3};
 
 /// A rotated box with rounded edges.
@@ -34,6 +35,17 @@ impl RoundedBox {
             rotation: yaw_rot * base,
         }
     }
+
+    /// The `up` and `yaw` [`RoundedBox::new`] was given, recovered from the rotation (the local y axis is
+    /// `-up`, and the yaw turns the un-yawed local z about it).
+    pub fn up_and_yaw(&self) -> (V3, f64) {
+        let y = self.rotation * Vector3::y();
+        let z0 = Vector3::z();
+        let z = (z0 - y * y.dot(&z0)).normalize();
+        let zr = self.rotation * Vector3::z();
+        let yaw = y.dot(&z.cross(&zr)).atan2(z.dot(&zr));
+        (-y, yaw)
+    }
 }
 
 impl Shape for RoundedBox {
@@ -48,6 +60,16 @@ impl Shape for RoundedBox {
             self.centre.y,
             self.centre.z
         )
+    }
+    fn to_truth(&self) -> ObjectTruth {
+        let (up, yaw) = self.up_and_yaw();
+        ObjectTruth::RoundedBox {
+            centre_m: self.centre.into(),
+            half_extents_m: self.half.into(),
+            rounding_m: self.rounding,
+            up: up.into(),
+            yaw_rad: yaw,
+        }
     }
     fn sdf(&self, p: &V3) -> f64 {
         let l = self.rotation.inverse() * (p - self.centre);

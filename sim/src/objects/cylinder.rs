@@ -1,6 +1,7 @@
 //! Capped cylinder (exact signed distance; intersection by sphere tracing).
 
 use super::{Shape, V3};
+use fires_record::ObjectTruth;
 
 /// A solid cylinder with flat caps.
 #[derive(Clone, Debug, PartialEq)]
@@ -28,6 +29,14 @@ impl Shape for Cylinder {
             self.axis.y,
             self.axis.z
         )
+    }
+    fn to_truth(&self) -> ObjectTruth {
+        ObjectTruth::Cylinder {
+            centre_m: self.centre.into(),
+            axis: self.axis.into(),
+            radius_m: self.radius,
+            half_length_m: self.half_length,
+        }
     }
     fn sdf(&self, p: &V3) -> f64 {
         let d = p - self.centre;

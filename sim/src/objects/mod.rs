@@ -2,17 +2,26 @@
 //!
 //! Every object is a closed solid described by a signed distance (negative inside). Spheres and cylinders are
 //! intersected in closed form; the rounded box and the blob by sphere tracing followed by bisection to 1e-12 m.
+//!
+//! [`Shape::distance`] is the exact Euclidean distance to the surface (what a reconstructed surface is measured
+//! against): the sphere's, the cylinder's and the rounded box's signed distances are exact (the rounded box is
+//! a box grown by a ball, whose distance is the box's minus the ball's radius, inside and out), the blob's is
+//! not and it searches its closest point ([`Blob::closest_point`]). [`from_truth`] rebuilds an object from the
+//! ground truth's description of it.
 
 mod blob;
 mod boxes;
 mod cylinder;
 mod sphere;
+mod truth;
 
 pub use blob::Blob;
 pub use boxes::RoundedBox;
 pub use cylinder::Cylinder;
 pub use sphere::Sphere;
+pub use truth::{from_truth, TruthError};
 
+use fires_record::ObjectTruth;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -85,6 +94,29 @@ impl ObjectKind {
 pub trait Shape: Send + Sync + std::fmt::Debug {
     /// Human-readable description for the ground truth.
     fn describe(&self) -> String;
+    /// The object as the ground truth records it (`target.object` of `truth/world.json`).
+    fn to_truth(&self) -> ObjectTruth;
+    /// The surface point closest to `p` (Euclidean). The default steps along the gradient by the signed
+    /// distance, exact for shapes whose [`Shape::sdf`] is an exact distance (away from the medial axis, where
+    /// the closest point is not unique and one of them is returned).
+    fn closest_point(&self, p: &V3) -> V3 {
+        p - self.gradient(p) * self.sdf(p)
+    }
+    /// Exact Euclidean distance from `p` to the surface (unsigned). The default is `|sdf|`, exact for shapes
+    /// whose [`Shape::sdf`] is an exact distance; others override it.
+    fn distance(&self, p: &V3) -> f64 {
+        self.sdf(p).abs()
+    }
+    /// Unit gradient of the signed distance at `p` (central differences of 1e-7 m).
+    fn gradient(&self, p: &V3) -> V3 {
+        let h = 1e-7;
+        let g = V3::new(
+            self.sdf(&(p + V3::x() * h)) - self.sdf(&(p - V3::x() * h)),
+            self.sdf(&(p + V3::y() * h)) - self.sdf(&(p - V3::y() * h)),
+            self.sdf(&(p + V3::z() * h)) - self.sdf(&(p - V3::z() * h)),
+        );
+        g.try_normalize(1e-300).unwrap_or_else(V3::z)
+    }
     /// Signed distance (or a lower bound of it, scaled by [`Shape::lipschitz`]); negative inside.
     fn sdf(&self, p: &V3) -> f64;
     /// Bound on `|grad sdf|` (1 for exact distances); sphere tracing divides steps by it.

@@ -1,6 +1,7 @@
 //! Sphere.
 
 use super::{ray_sphere, Shape, V3};
+use fires_record::ObjectTruth;
 
 /// A sphere.
 #[derive(Clone, Debug, PartialEq)]
@@ -17,6 +18,15 @@ impl Shape for Sphere {
             "sphere r={:.4} m at [{:.4}, {:.4}, {:.4}]",
             self.radius, self.centre.x, self.centre.y, self.centre.z
         )
+    }
+    fn to_truth(&self) -> ObjectTruth {
+        ObjectTruth::Sphere {
+            centre_m: self.centre.into(),
+            radius_m: self.radius,
+        }
+    }
+    fn closest_point(&self, p: &V3) -> V3 {
+        self.centre + self.normal(p) * self.radius
     }
     fn sdf(&self, p: &V3) -> f64 {
         (p - self.centre).norm() - self.radius
