@@ -48,11 +48,66 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         min_cutoff: None,
         beta: None,
         d_cutoff: None,
+        no_surface: false,
     })?;
-    eprintln!(
-        "tracked; strokes, track and report in {}",
-        args.out.join("replay").display()
-    );
-    println!("{}", serde_json::to_string(&report)?);
+    let out = args.out.join("replay");
+    if let fires_record::Report::Replay(r) = &report {
+        for line in summary_lines(r, &out) {
+            println!("{line}");
+        }
+    }
     Ok(())
+}
+
+/// The few lines a person reads after a demo: what was made, its errors in mm, where the files are.
+fn summary_lines(r: &fires_record::ReplayReport, out: &std::path::Path) -> Vec<String> {
+    let mut lines = Vec::new();
+    match &r.strokes_summary {
+        Some(s) => lines.push(format!(
+            "tracked {} of {} drawn strokes, off the true pen path by RMS {} (median stroke), {} (worst)",
+            s.kept,
+            s.true_strokes,
+            mm(s.rms_mm.median),
+            mm(s.rms_mm.worst)
+        )),
+        None => lines.push(format!("tracked {} strokes", r.strokes)),
+    }
+    if let Some(n) = &r.network {
+        lines.push(format!(
+            "curve network: {} faces from {} of {} strokes -> {}",
+            n.faces,
+            n.used_strokes,
+            n.strokes,
+            out.join("network.json").display()
+        ));
+    }
+    let surface = |name: &str, s: &fires_record::SurfaceReport| {
+        format!(
+            "{name}: {} vertices, RMS {} ({:.2}% of the {:.0} mm drawn region), p95 {}, Hausdorff {}, {:.0}% of the region within 3 mm, curves {} off",
+            s.vertices,
+            mm(Some(s.rms_mm)),
+            s.rms_pct_diag,
+            s.diag_mm,
+            mm(Some(s.p95_mm)),
+            mm(Some(s.hausdorff_mm)),
+            100.0 * s.completeness_3mm,
+            mm(s.curve_rms_mm)
+        )
+    };
+    match &r.surface {
+        Some(s) => lines.push(surface("surface (FIRESV2) from the tracked strokes", s)),
+        None => lines.push("no surface: the tracked strokes make no closed network face".into()),
+    }
+    if let Some(s) = &r.surface_from_truth {
+        lines.push(surface("the same from the true strokes", s));
+    }
+    lines.push(format!(
+        "files in {}: strokes.json, network.json, surface.obj (+ .curves.obj), report.json; pictures surface.png, surface_error.png, surface_truth_error.png, strokes_on_truth.png, tip_error.png",
+        out.display()
+    ));
+    lines
+}
+
+fn mm(v: Option<f64>) -> String {
+    v.map_or("-".into(), |x| format!("{x:.2} mm"))
 }

@@ -13,6 +13,8 @@ pub mod edit;
 pub mod mesh;
 pub mod network;
 pub mod output;
+pub mod pipeline;
+pub mod recon;
 pub mod pivot;
 pub mod replay;
 pub mod sim;

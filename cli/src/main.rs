@@ -51,6 +51,8 @@ enum Command {
     Mesh(cli::mesh::MeshArgs),
     /// Build the curve network from strokes (or replay a sketch journal): network.json and a summary line.
     Network(cli::network::NetworkArgs),
+    /// Reconstruct a surface from a curve network (FIRESV1 or FIRESV2): quad mesh, curves, summary line.
+    Recon(cli::recon::ReconArgs),
 }
 
 fn main() -> ExitCode {
@@ -66,6 +68,7 @@ fn main() -> ExitCode {
         Command::Pivot(args) => cli::pivot::run(args),
         Command::Mesh(args) => cli::mesh::run(args),
         Command::Network(args) => cli::network::run(args),
+        Command::Recon(args) => cli::recon::run(args),
         Command::Edit(args) => cli::edit::run(args),
         Command::Coat(args) => cli::coat::run(args),
         Command::Transplant(args) => cli::transplant::run(args),

@@ -18,6 +18,7 @@ use fires_record::report::TipErrorPlot;
 use fires_record::{RecordingReader, Report};
 
 use crate::output::{write_json, write_strokes, write_track_csv};
+use crate::pipeline::surface_stage;
 
 /// Arguments of `fires replay`.
 #[derive(Debug, clap::Args)]
@@ -45,6 +46,9 @@ pub struct ReplayArgs {
     /// One Euro display filter: cutoff of the speed estimate, Hz (default 2.0).
     #[arg(long)]
     pub d_cutoff: Option<f64>,
+    /// Stop after the strokes: no curve network, surface or surface comparison.
+    #[arg(long)]
+    pub no_surface: bool,
 }
 
 /// `--display`: the filter behind the live display of the tip.
@@ -163,6 +167,17 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<Report> {
         let path = args.out.join("tip_error.png");
         let scale = tip_error_png(&path, &points)?;
         report.tip_error_plot = Some(TipErrorPlot { path, scale });
+    }
+    if !args.no_surface {
+        let stage = surface_stage(
+            &reader,
+            &fires_record::StrokesFile::new(out.strokes.clone()),
+            &args.out,
+        )
+        .with_context(|| format!("surface of {}", args.recording.display()))?;
+        report.surface = stage.surface;
+        report.surface_from_truth = stage.surface_from_truth;
+        report.network = Some(stage.network);
     }
     warn_damage(&reader, &report.damaged);
     let report = Report::Replay(Box::new(report));

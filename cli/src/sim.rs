@@ -17,7 +17,7 @@ pub struct SessionArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Simulated duration, seconds.
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value_t = 60.0)]
     pub duration: f64,
 }
 

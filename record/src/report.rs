@@ -101,6 +101,20 @@ pub struct ReplayReport {
     /// own error, without the tracking's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub surface_from_truth: Option<SurfaceReport>,
+    /// The curve network built from the tracked strokes (`network.json`), when the surface stage ran.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub network: Option<NetworkReport>,
+}
+
+/// The curve network built from a replay's strokes (docs/report.md, "Surface").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NetworkReport {
+    /// Faces of the network.
+    pub faces: usize,
+    /// Strokes the network used.
+    pub used_strokes: usize,
+    /// Strokes offered (the replay's strokes with points).
+    pub strokes: usize,
 }
 
 /// A reconstructed surface against the true object (docs/report.md, "Surface").

@@ -127,6 +127,7 @@ fn replay_report() -> ReplayReport {
         vision_refusals: None,
         surface: None,
         surface_from_truth: None,
+        network: None,
     }
 }
 

@@ -239,6 +239,7 @@ pub fn replay_report(
         vision_refusals: None,
         surface: None,
         surface_from_truth: None,
+        network: None,
     };
     report.vision_refusals = Some(super::refusals::vision_refusals(
         out,

@@ -179,6 +179,27 @@ fn rms(values: &[f64]) -> f64 {
     (values.iter().map(|d| d * d).sum::<f64>() / values.len() as f64).sqrt()
 }
 
+/// Distance from each of `points` to the surface (its faces, triangulated), metres: how far a surface lies
+/// from the curves it was built from, without a truth.
+pub fn point_distances(surface: &SurfaceMesh, points: &[Vec3]) -> Result<Vec<f64>, CompareError> {
+    if points.iter().any(|p| !p.is_finite()) {
+        return Err(CompareError::NonFinite("curve point"));
+    }
+    let pos = surface.positions();
+    let triangles: Vec<[Vec3; 3]> = face_triangles(surface)?
+        .iter()
+        .map(|t| [pos[t[0]], pos[t[1]], pos[t[2]]])
+        .collect();
+    let bvh = TriangleBvh::new(triangles);
+    if bvh.is_empty() {
+        return Err(CompareError::EmptySurface);
+    }
+    Ok(points
+        .iter()
+        .map(|&p| bvh.closest(p).map_or(f64::INFINITY, |h| h.distance))
+        .collect())
+}
+
 /// Measures `surface` against the truth (module docs): `truth_distance` gives the Euclidean distance in metres
 /// from a point to the true object's surface, `truth_region` samples the true drawn region, `curve_points` are
 /// the network's curve points (all in metres, the surface's frame).

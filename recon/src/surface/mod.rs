@@ -32,7 +32,7 @@ pub use catmull_clark::{
     CatmullClarkOptions, CurveKeeping,
 };
 pub use compare::{
-    compare_surface, sample_triangles, CompareError, CompareOptions, SurfaceComparison,
+    compare_surface, point_distances, sample_triangles, CompareError, CompareOptions, SurfaceComparison,
     COMPLETENESS_THRESHOLD_M,
 };
 pub use control::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};
