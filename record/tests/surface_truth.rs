@@ -66,7 +66,13 @@ fn objects() -> Vec<ObjectTruth> {
 fn the_target_is_written_and_read_back_and_an_older_world_file_still_reads() {
     for object in objects() {
         let dir = tempfile::tempdir().unwrap();
-        let meta = test_meta((8, 6), 0.1, &[FrameContent::Blobs, FrameContent::Blobs], None, true);
+        let meta = test_meta(
+            (8, 6),
+            0.1,
+            &[FrameContent::Blobs, FrameContent::Blobs],
+            None,
+            true,
+        );
         let mut w = RecordingWriter::create(dir.path(), &meta).unwrap();
         let written = world(Some(target(object.clone())));
         w.write_world_truth(&written).unwrap();
@@ -176,6 +182,9 @@ fn the_surface_blocks_read_back_and_a_report_without_them_still_reads() {
     ] {
         assert!(v["surface"].get(key).is_some(), "{key}");
     }
-    assert_eq!(v["surface_from_truth"]["curve_rms_mm"], serde_json::Value::Null);
+    assert_eq!(
+        v["surface_from_truth"]["curve_rms_mm"],
+        serde_json::Value::Null
+    );
     assert_eq!(Report::from_json(&text).unwrap(), report);
 }

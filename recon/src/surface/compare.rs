@@ -238,7 +238,7 @@ pub fn compare_surface(
         .iter()
         .map(|t| triangle_area(t[0], t[1], t[2]))
         .sum();
-    if !(area > 0.0) {
+    if area.is_nan() || area <= 0.0 {
         return Err(CompareError::EmptySurface);
     }
     let spacing = opts
@@ -275,7 +275,7 @@ pub fn compare_surface(
         )
     });
     let diag = (hi - lo).norm();
-    if !(diag > 0.0) {
+    if diag.is_nan() || diag <= 0.0 {
         return Err(CompareError::EmptyRegion);
     }
     let near = from_region

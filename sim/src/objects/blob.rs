@@ -118,7 +118,11 @@ impl Blob {
             // Gradient and Hessian of f / 2.
             let g = [ja.dot(&res), jb.dot(&res)];
             let gn = [ja.dot(&ja), ja.dot(&jb), jb.dot(&jb)];
-            let newton = [gn[0] + saa.dot(&res), gn[1] + sab.dot(&res), gn[2] + sbb.dot(&res)];
+            let newton = [
+                gn[0] + saa.dot(&res),
+                gn[1] + sab.dot(&res),
+                gn[2] + sbb.dot(&res),
+            ];
             let step = solve_2x2(newton, g).or_else(|| solve_2x2(gn, g));
             let Some(mut delta) = step else { break };
             // Descent direction required; otherwise use Gauss-Newton's, which always is one.
@@ -210,7 +214,8 @@ fn tangent_basis(n: &V3) -> (V3, V3) {
 /// Solves the symmetric 2x2 system `[[m0, m1], [m1, m2]] x = b` if it is positive definite.
 fn solve_2x2(m: [f64; 3], b: [f64; 2]) -> Option<[f64; 2]> {
     let det = m[0] * m[2] - m[1] * m[1];
-    if !(m[0] > 0.0 && det > 1e-300 * (m[0] * m[2]).abs().max(1e-300)) || !det.is_finite() {
+    let definite = m[0] > 0.0 && det > 1e-300 * (m[0] * m[2]).abs().max(1e-300);
+    if !definite || !det.is_finite() {
         return None;
     }
     Some([
