@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use fires_recon::network::{build_network, BuildOptions, Network, NetworkFile, StrokeInput};
-use fires_recon::render::{render, save_png, side_by_side, Polyline, RenderOptions, Scene, SceneMesh};
+use fires_recon::render::{
+    render, save_png, side_by_side, Polyline, RenderOptions, Scene, SceneMesh,
+};
 use fires_recon::surface::{compare_surface, CompareOptions, ControlMesh};
 use fires_recon::Vec3;
 use fires_record::report::{NetworkReport, SurfaceReport};
@@ -137,8 +139,11 @@ pub fn surface_stage(
         files.push(write_surface(surface, &path)?);
         files.push(path);
         let png = out.join("surface.png");
-        save_png(&two_views(&surface_scene(surface, [205, 190, 160]), view), &png)
-            .with_context(|| format!("cannot write {}", png.display()))?;
+        save_png(
+            &two_views(&surface_scene(surface, [205, 190, 160]), view),
+            &png,
+        )
+        .with_context(|| format!("cannot write {}", png.display()))?;
         files.push(png);
     }
     if let Some(truth) = &truth {
@@ -149,14 +154,19 @@ pub fn surface_stage(
         for s in &strokes.strokes {
             for piece in &s.pieces {
                 scene.polylines.push(Polyline {
-                    points: piece.points.iter().map(|p| Vec3::new(p.p_m[0], p.p_m[1], p.p_m[2])).collect(),
+                    points: piece
+                        .points
+                        .iter()
+                        .map(|p| Vec3::new(p.p_m[0], p.p_m[1], p.p_m[2]))
+                        .collect(),
                     color: [200, 40, 30],
                     width: 2,
                     closed: false,
                 });
             }
         }
-        save_png(&two_views(&scene, view), &png).with_context(|| format!("cannot write {}", png.display()))?;
+        save_png(&two_views(&scene, view), &png)
+            .with_context(|| format!("cannot write {}", png.display()))?;
         files.push(png);
         if let Some(surface) = &surface {
             outputs.surface = Some(surface_report(surface, truth)?);
@@ -192,7 +202,12 @@ fn two_views(scene: &Scene, view: Option<Vec3>) -> fires_recon::render::RgbImage
         .meshes
         .iter()
         .flat_map(|m| m.positions.iter().copied())
-        .chain(scene.polylines.iter().flat_map(|l| l.points.iter().copied()))
+        .chain(
+            scene
+                .polylines
+                .iter()
+                .flat_map(|l| l.points.iter().copied()),
+        )
         .collect();
     let mut front = drawn_side_view(&pts);
     if let Some(v) = view.and_then(Vec3::try_normalize) {
@@ -220,7 +235,10 @@ fn true_object_mesh(scene: &TrueScene) -> SceneMesh {
     };
     for i in 0..=n {
         for j in 0..=n {
-            let uv = [-r + 2.0 * r * i as f64 / n as f64, -r + 2.0 * r * j as f64 / n as f64];
+            let uv = [
+                -r + 2.0 * r * i as f64 / n as f64,
+                -r + 2.0 * r * j as f64 / n as f64,
+            ];
             if let Some((p, _)) = scene.lift(uv) {
                 idx[i * (n + 1) + j] = Some(mesh.positions.len());
                 mesh.positions.push(v3(&p));
@@ -264,8 +282,14 @@ fn error_scene(surface: &ControlMesh, truth: &TrueObject) -> Scene {
         .collect();
     for f in surface.mesh.face_index_lists() {
         let c = f.iter().fold(Vec3::ZERO, |s, &i| s + positions[i]) * (1.0 / f.len().max(1) as f64);
-        let d = truth.scene.shape.distance(&nalgebra::Vector3::new(c.x, c.y, c.z));
-        let bin = BINS.iter().position(|&(limit, _)| d <= limit).unwrap_or(BINS.len() - 1);
+        let d = truth
+            .scene
+            .shape
+            .distance(&nalgebra::Vector3::new(c.x, c.y, c.z));
+        let bin = BINS
+            .iter()
+            .position(|&(limit, _)| d <= limit)
+            .unwrap_or(BINS.len() - 1);
         meshes[bin].faces.push(f);
     }
     Scene {

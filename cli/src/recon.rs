@@ -47,6 +47,9 @@ pub struct ReconArgs {
     /// Write a shaded picture of the surface with the curves over it.
     #[arg(long)]
     pub png: Option<PathBuf>,
+    /// A simulated recording whose true object the surface is compared with (`truth` in the summary).
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
 }
 
 /// The summary line of `fires recon`.
@@ -66,12 +69,15 @@ pub struct ReconSummary {
     pub curve_rms_mm: f64,
     /// Largest distance from a drawn curve's point to the surface, mm.
     pub curve_max_mm: f64,
+    /// The surface against the true object of `--truth` (docs/report.md, "Surface").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub truth: Option<fires_record::SurfaceReport>,
 }
 
 /// Reads IN as a network (see the module docs).
 pub fn read_network(input: &Path, strokes: Option<&Path>) -> anyhow::Result<Network> {
-    let text =
-        std::fs::read_to_string(input).with_context(|| format!("cannot read {}", input.display()))?;
+    let text = std::fs::read_to_string(input)
+        .with_context(|| format!("cannot read {}", input.display()))?;
     let format = serde_json::from_str::<serde_json::Value>(&text)
         .ok()
         .and_then(|v| v.get("format").and_then(|f| f.as_str()).map(str::to_owned));
@@ -81,7 +87,10 @@ pub fn read_network(input: &Path, strokes: Option<&Path>) -> anyhow::Result<Netw
         }
         Some(JOURNAL_FORMAT) => {
             let strokes = strokes.ok_or_else(|| {
-                anyhow::anyhow!("{} is a sketch journal: give its strokes with --strokes", input.display())
+                anyhow::anyhow!(
+                    "{} is a sketch journal: give its strokes with --strokes",
+                    input.display()
+                )
             })?;
             let inputs = load_stroke_inputs(strokes)?;
             Ok(network_of(&inputs, Some(input))?.0)
@@ -124,7 +133,10 @@ pub fn run(args: &ReconArgs) -> anyhow::Result<()> {
     write_surface(&surface, &args.out)?;
     if let Some(png) = &args.png {
         save_png(
-            &render(&surface_scene(&surface, [205, 190, 160]), &drawn_side_view(surface.mesh.positions())),
+            &render(
+                &surface_scene(&surface, [205, 190, 160]),
+                &drawn_side_view(surface.mesh.positions()),
+            ),
             png,
         )
         .with_context(|| format!("cannot write {}", png.display()))?;
@@ -137,9 +149,35 @@ pub fn run(args: &ReconArgs) -> anyhow::Result<()> {
         ms,
         curve_rms_mm: curve.rms_mm,
         curve_max_mm: curve.max_mm,
+        truth: match &args.truth {
+            Some(rec) => Some(compare_with_recording(&surface, args.method, rec)?),
+            None => None,
+        },
     };
     println!("{}", serde_json::to_string(&summary)?);
     Ok(())
+}
+
+/// The surface against the true object of the simulated recording `rec`.
+pub fn compare_with_recording(
+    surface: &ControlMesh,
+    method: Method,
+    rec: &Path,
+) -> anyhow::Result<fires_record::SurfaceReport> {
+    let reader = fires_record::RecordingReader::open(rec)
+        .with_context(|| format!("cannot open recording {}", rec.display()))?;
+    let truth = crate::pipeline::true_object(&reader)?.ok_or_else(|| {
+        anyhow::anyhow!(
+            "{} has no true object (truth/world.json target)",
+            rec.display()
+        )
+    })?;
+    let mut report = crate::pipeline::surface_report(surface, &truth)?;
+    report.method = match method {
+        Method::V1 => "v1".into(),
+        Method::V2 => "v2".into(),
+    };
+    Ok(report)
 }
 
 /// Writes the mesh to `out` and its curves as OBJ lines to `out` with the extension `.curves.obj`.
@@ -171,11 +209,17 @@ pub fn write_surface(surface: &ControlMesh, out: &Path) -> anyhow::Result<PathBu
 /// The surface shaded in `color` with its drawn curves over it (sharp ones red).
 pub fn surface_scene(surface: &ControlMesh, color: [u8; 3]) -> Scene {
     let mut scene = Scene::default();
-    scene.meshes.push(SceneMesh::from_mesh(&surface.mesh, color));
+    scene
+        .meshes
+        .push(SceneMesh::from_mesh(&surface.mesh, color));
     for c in surface.curves.iter().filter(|c| !c.generated) {
         scene.polylines.push(Polyline {
             points: c.points.clone(),
-            color: if c.sharp { [200, 30, 30] } else { [30, 60, 160] },
+            color: if c.sharp {
+                [200, 30, 30]
+            } else {
+                [30, 60, 160]
+            },
             width: 2,
             closed: false,
         });
