@@ -33,7 +33,9 @@ pub use meta::{
     PenGeometry, RigCalibration, Source, UndistortError, FORMAT_MAJOR, FORMAT_NAME, FORMAT_VERSION,
 };
 pub use reader::{FrameImage, RecordingReader};
-pub use report::{NetworkReport, ReplayReport, Report, SurfaceReport, REPORT_FORMAT, REPORT_VERSION};
+pub use report::{
+    NetworkReport, ReplayReport, Report, SurfaceReport, REPORT_FORMAT, REPORT_VERSION,
+};
 pub use strokes::{
     Stroke, StrokePiece, StrokePoint, StrokesError, StrokesFile, STROKES_FORMAT, STROKES_VERSION,
 };

@@ -32,8 +32,8 @@ pub use catmull_clark::{
     CatmullClarkOptions, CurveKeeping,
 };
 pub use compare::{
-    compare_surface, point_distances, sample_triangles, CompareError, CompareOptions, SurfaceComparison,
-    COMPLETENESS_THRESHOLD_M,
+    compare_surface, point_distances, sample_triangles, CompareError, CompareOptions,
+    SurfaceComparison, COMPLETENESS_THRESHOLD_M,
 };
 pub use control::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};
 pub use coons::{chord_params, span_points, CoonsPatch, Side};
