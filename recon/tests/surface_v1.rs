@@ -622,8 +622,11 @@ use fires_recon::surface::{refine, RefineOptions};
 #[test]
 fn basic_refinement_gives_quads_with_every_vertex_on_a_polyline() {
     for n in [4, 5, 7] {
-        let tq = triquadrify(&base_mesh(&ngon_network(n)).unwrap(), &TriquadOptions::default())
-            .unwrap();
+        let tq = triquadrify(
+            &base_mesh(&ngon_network(n)).unwrap(),
+            &TriquadOptions::default(),
+        )
+        .unwrap();
         let (q, t) = tq.mesh.faces().fold((0, 0), |(q, t), f| {
             if tq.mesh.face_valence(f) == 4 {
                 (q + 1, t)
@@ -632,11 +635,25 @@ fn basic_refinement_gives_quads_with_every_vertex_on_a_polyline() {
             }
         });
         for (steps, match_density) in [(1, true), (2, true), (2, false), (3, true)] {
-            let r = refine(&tq, &RefineOptions { steps, match_density }).unwrap();
+            let r = refine(
+                &tq,
+                &RefineOptions {
+                    steps,
+                    match_density,
+                },
+            )
+            .unwrap();
             assert!(r.mesh.faces().all(|f| r.mesh.face_valence(f) == 4));
             let p = 4usize.pow(steps as u32);
-            assert_eq!(r.mesh.n_faces(), q * p + t * 3 * p / 4, "{n}-gon, {steps} steps");
-            assert!(r.mesh.edges().all(|e| r.span(e).is_some()), "every edge follows a polyline");
+            assert_eq!(
+                r.mesh.n_faces(),
+                q * p + t * 3 * p / 4,
+                "{n}-gon, {steps} steps"
+            );
+            assert!(
+                r.mesh.edges().all(|e| r.span(e).is_some()),
+                "every edge follows a polyline"
+            );
             assert_spans_on_curves(&r, 1e-12);
         }
     }
@@ -647,9 +664,19 @@ fn a_disc_sketched_with_the_tools_reconstructs_flat() {
     use common::disc::{vertical, Z};
     use fires_recon::network::tools::{insert_curve, InsertOptions};
     let mut net = Network::new();
-    insert_boundary(&mut net, CurveInput::new(&circle(400)), &BoundaryOptions::default()).unwrap();
+    insert_boundary(
+        &mut net,
+        CurveInput::new(&circle(400)),
+        &BoundaryOptions::default(),
+    )
+    .unwrap();
     for x in [-0.05, 0.0, 0.05] {
-        insert_curve(&mut net, CurveInput::new(&vertical(x)), &InsertOptions::default()).unwrap();
+        insert_curve(
+            &mut net,
+            CurveInput::new(&vertical(x)),
+            &InsertOptions::default(),
+        )
+        .unwrap();
     }
     let s = reconstruct_v1(&net, &V1Options::default()).unwrap();
     assert!(s.mesh.faces().all(|f| s.mesh.face_valence(f) == 4));

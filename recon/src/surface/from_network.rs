@@ -143,7 +143,7 @@ pub fn base_mesh(net: &Network) -> Result<ControlMesh, SurfaceError> {
         let mut curve = Curve::new(points, pl.attrs.sharpness >= 0.5);
         curve.source = Some(ed.polyline.idx());
         let len = curve.length();
-        if !(len > 0.0) {
+        if len.is_nan() || len <= 0.0 {
             return Err(SurfaceError::Degenerate(format!(
                 "edge {e}'s polyline has zero length"
             )));
