@@ -694,3 +694,49 @@ fn a_disc_sketched_with_the_tools_reconstructs_flat() {
         }
     }
 }
+
+#[test]
+fn a_sharp_cube_network_stays_on_the_cube_faces() {
+    // Distance of a point to the surface of the cube [0, 0.1]³.
+    let to_cube = |p: Vec3| {
+        let d = [p.x, p.y, p.z]
+            .iter()
+            .map(|&c| c.abs().min((c - 0.1).abs()))
+            .fold(f64::INFINITY, f64::min);
+        let inside = [p.x, p.y, p.z]
+            .iter()
+            .all(|&c| (-1e-12..=0.1 + 1e-12).contains(&c));
+        if inside {
+            d
+        } else {
+            f64::INFINITY
+        }
+    };
+    let worst_off = |s: &ControlMesh| {
+        s.mesh
+            .vertices()
+            .map(|x| to_cube(s.mesh.position(x)))
+            .fold(0.0, f64::max)
+    };
+    // The whole of V1 on the sharp cube keeps every vertex on the cube's faces.
+    let sharp = reconstruct_v1(&cube_network(1.0), &V1Options::default()).unwrap();
+    assert!(
+        worst_off(&sharp) <= 1e-9 * 0.1,
+        "sharp cube: {}",
+        worst_off(&sharp)
+    );
+    // The interpolatory rules themselves (no snapping): the sharp rules keep each side of a crease to
+    // itself; without sharp curves the four-point rule reaches across the cube's edges and bulges.
+    let plain = NulissOptions {
+        snap_to_curves: false,
+    };
+    let opts = V1Options::default();
+    let s = nuliss_mod(&refined_v1(&cube_network(1.0), &opts).unwrap(), &plain).unwrap();
+    assert!(
+        worst_off(&s) <= 1e-9 * 0.1,
+        "sharp rules: {}",
+        worst_off(&s)
+    );
+    let s = nuliss_mod(&refined_v1(&cube_network(0.0), &opts).unwrap(), &plain).unwrap();
+    assert!(worst_off(&s) > 1e-4, "smooth rules: {}", worst_off(&s));
+}

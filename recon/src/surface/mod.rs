@@ -32,4 +32,4 @@ pub use from_network::base_mesh;
 pub use nuliss::{nuliss_mod, nuliss_mod_n, NulissOptions};
 pub use refine::{refine, refine_step, RefineOptions};
 pub use triquad::{triquadrify, TriquadOptions};
-pub use v1::{reconstruct_v1, refined_v1, subdivide_v1, V1Options};
+pub use v1::{reconstruct_v1, refined_v1, subdivide_v1, without_generated, V1Options};

@@ -6,7 +6,7 @@
 //! is the thesis's hybrid (its telephone: 1 NULISSmod + 2 Catmull-Clark steps).
 
 use super::catmull_clark::{catmull_clark, CatmullClarkOptions};
-use super::control::ControlMesh;
+use super::control::{ControlMesh, VertexTag};
 use super::error::SurfaceError;
 use super::from_network::base_mesh;
 use super::nuliss::{nuliss_mod, NulissOptions};
@@ -29,6 +29,10 @@ pub struct V1Options {
     pub nuliss: NulissOptions,
     /// Catmull-Clark options (sharp rules, curve keeping).
     pub catmull_clark: CatmullClarkOptions,
+    /// Keep the generated polylines (triquadrification cuts, refinement centre lines) as constraints in the
+    /// Catmull-Clark levels too (default false: only the network's own polylines are kept there, so the
+    /// approximating levels smooth the patch interiors; NULISSmod always snaps to all of them, §6.3).
+    pub keep_generated: bool,
 }
 
 impl Default for V1Options {
@@ -40,6 +44,7 @@ impl Default for V1Options {
             nuliss_levels: 1,
             nuliss: NulissOptions::default(),
             catmull_clark: CatmullClarkOptions::default(),
+            keep_generated: false,
         }
     }
 }
@@ -58,6 +63,9 @@ pub fn subdivide_v1(cm: &ControlMesh, opts: &V1Options) -> Result<ControlMesh, S
         cur = if level < opts.nuliss_levels {
             nuliss_mod(&cur, &opts.nuliss)?
         } else {
+            if level == opts.nuliss_levels && !opts.keep_generated {
+                cur = without_generated(&cur);
+            }
             catmull_clark(&cur, &opts.catmull_clark)
                 .map_err(|e| SurfaceError::BadControlMesh(format!("Catmull-Clark: {e}")))?
         };
@@ -68,4 +76,24 @@ pub fn subdivide_v1(cm: &ControlMesh, opts: &V1Options) -> Result<ControlMesh, S
 /// FIRESV1: the surface of `net` as a quad control mesh at the final level (module doc).
 pub fn reconstruct_v1(net: &Network, opts: &V1Options) -> Result<ControlMesh, SurfaceError> {
     subdivide_v1(&refined_v1(net, opts)?, opts)
+}
+
+/// `cm` with the spans and curve tags of generated curves removed (the curves themselves stay, so curve
+/// indices do not change).
+pub fn without_generated(cm: &ControlMesh) -> ControlMesh {
+    let generated = |c: usize| cm.curves.get(c).is_some_and(|c| c.generated);
+    let mut out = cm.clone();
+    for s in &mut out.edge_curve {
+        if s.is_some_and(|x| generated(x.curve)) {
+            *s = None;
+        }
+    }
+    for t in &mut out.vertex_tag {
+        if let VertexTag::OnCurve(p) = *t {
+            if generated(p.curve) {
+                *t = VertexTag::Free;
+            }
+        }
+    }
+    out
 }
