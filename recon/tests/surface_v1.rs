@@ -678,6 +678,33 @@ fn a_disc_sketched_with_the_tools_reconstructs_flat() {
         )
         .unwrap();
     }
+    for (a0, a1) in [(160.0f64, -20.0f64), (100.0, 250.0)] {
+        let c = common::disc::chord(a0.to_radians(), a1.to_radians(), 0.0);
+        insert_curve(&mut net, CurveInput::new(&c), &InsertOptions::default()).unwrap();
+    }
+    // A stroke from the top arc that stops on the first chord (overshooting it by 3 mm, trimmed): a
+    // T-junction, so the faces beside it get five and more sides.
+    let x = 0.025;
+    let top = common::disc::B / common::disc::R * (common::disc::R.powi(2) - x * x).sqrt();
+    let t = (x + 0.1 * 160f64.to_radians().cos().abs()) / (2.0 * 0.1 * 20f64.to_radians().cos());
+    let y_chord = 0.097 * 20f64.to_radians().sin() * (1.0 - 2.0 * t);
+    let stroke = common::disc::line([x, top, Z], [x, y_chord - 0.003, Z], 0.002);
+    insert_curve(
+        &mut net,
+        CurveInput::new(&stroke),
+        &InsertOptions::default(),
+    )
+    .unwrap();
+    let base = base_mesh(&net).unwrap();
+    let sides: Vec<usize> = base
+        .mesh
+        .faces()
+        .map(|f| base.mesh.face_valence(f))
+        .collect();
+    assert!(
+        sides.iter().any(|&n| n >= 5),
+        "the sketch has faces to triquadrify: {sides:?}"
+    );
     let s = reconstruct_v1(&net, &V1Options::default()).unwrap();
     assert!(s.mesh.faces().all(|f| s.mesh.face_valence(f) == 4));
     let worst = s
