@@ -599,6 +599,56 @@ fn v1_reconstructs_known_surfaces_within_half_a_percent_of_the_diagonal() {
         hausdorff(&s, &d, &truth),
         diag(&truth),
     ));
+    // 4. The torus again with pairs of quads merged into hexagons (triquadrification on a curved surface):
+    // the hexagons' cuts come from Q''s Coons patch, not from the torus.
+    let (ns, nt) = (8, 6);
+    let at = |i: usize, j: usize| (i % ns) + ns * (j % nt);
+    let mut faces = Vec::new();
+    for j in 0..nt {
+        for i in (0..ns).step_by(2) {
+            faces.push(vec![
+                at(i, j),
+                at(i + 1, j),
+                at(i + 2, j),
+                at(i + 2, j + 1),
+                at(i + 1, j + 1),
+                at(i, j + 1),
+            ]);
+        }
+    }
+    let pts: Vec<[f64; 3]> = (0..ns * nt)
+        .map(|k| torus((k % ns) as f64 / ns as f64, (k / ns) as f64 / nt as f64))
+        .collect();
+    let uv = |k: usize| ((k % ns) as f64 / ns as f64, (k / ns) as f64 / nt as f64);
+    let net = network_from_polygons(
+        &pts,
+        &faces,
+        |a, b| {
+            let (pa, mut pb) = (uv(a), uv(b));
+            if (pb.0 - pa.0).abs() > 0.5 {
+                pb.0 += if pb.0 < pa.0 { 1.0 } else { -1.0 };
+            }
+            if (pb.1 - pa.1).abs() > 0.5 {
+                pb.1 += if pb.1 < pa.1 { 1.0 } else { -1.0 };
+            }
+            (0..=16)
+                .map(|k| {
+                    let w = k as f64 / 16.0;
+                    torus(pa.0 + w * (pb.0 - pa.0), pa.1 + w * (pb.1 - pa.1))
+                })
+                .collect()
+        },
+        |_, _| 0.0,
+    );
+    let s = reconstruct_v1(&net, &opts).unwrap();
+    let truth = grid_samples(&torus, 120);
+    let d = |p: Vec3| (((p.x * p.x + p.y * p.y).sqrt() - rr).hypot(p.z) - r).abs();
+    report.push((
+        "torus of hexagons",
+        s.mesh.n_vertices(),
+        hausdorff(&s, &d, &truth),
+        diag(&truth),
+    ));
     for (name, nv, (fwd, back), dg) in &report {
         let hd = fwd.max(*back);
         eprintln!(
