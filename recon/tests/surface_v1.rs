@@ -136,3 +136,607 @@ fn base_mesh_refuses_an_empty_network() {
         SurfaceError::EmptyNetwork
     );
 }
+
+// ----- Coons patches ------------------------------------------------------------------------------
+
+use common::netgen::parametric_network;
+use fires_recon::surface::{
+    nuliss_mod, reconstruct_v1, refined_v1, triquadrify, CoonsPatch, NulissOptions, Side,
+    TriquadOptions, V1Options,
+};
+
+fn v(p: [f64; 3]) -> Vec3 {
+    Vec3::from_array(p)
+}
+
+/// A wavy curve from `a` to `b` with `n` unevenly spaced samples.
+fn wavy(a: Vec3, b: Vec3, n: usize, amp: f64, seed: f64) -> Vec<Vec3> {
+    (0..=n)
+        .map(|i| {
+            let t = (i as f64 / n as f64).powf(1.3);
+            let w = (std::f64::consts::PI * t).sin() * amp;
+            a * (1.0 - t)
+                + b * t
+                + Vec3::new(
+                    w * (seed).cos(),
+                    w * (2.0 * seed).sin(),
+                    w * (t * 7.0 + seed).cos(),
+                )
+        })
+        .collect()
+}
+
+/// Distance from `p` to the polyline `pts`.
+fn dist_polyline(p: Vec3, pts: &[Vec3]) -> f64 {
+    pts.windows(2)
+        .map(|w| {
+            let d = w[1] - w[0];
+            let t = ((p - w[0]).dot(d) / d.norm_squared().max(1e-300)).clamp(0.0, 1.0);
+            (w[0] + d * t - p).norm()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn coons_patch_interpolates_its_four_sides() {
+    let c = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.0, 0.1, 0.2),
+        Vec3::new(1.2, 1.0, -0.1),
+        Vec3::new(-0.1, 0.9, 0.3),
+    ];
+    let s: Vec<Vec<Vec3>> = (0..4)
+        .map(|k| wavy(c[k], c[(k + 1) % 4], 9 + 3 * k, 0.2, k as f64 + 0.5))
+        .collect();
+    let p = CoonsPatch::from_loop([s[0].clone(), s[1].clone(), s[2].clone(), s[3].clone()]);
+    let sides = [
+        Side::new(s[0].clone()),
+        Side::new(s[1].clone()),
+        Side::new(s[2].clone()).reversed(),
+        Side::new(s[3].clone()).reversed(),
+    ];
+    let mut worst: f64 = 0.0;
+    for i in 0..=200 {
+        let t = i as f64 / 200.0;
+        worst = worst.max((p.eval(t, 0.0) - sides[0].at(t)).norm());
+        worst = worst.max((p.eval(1.0, t) - sides[1].at(t)).norm());
+        worst = worst.max((p.eval(t, 1.0) - sides[2].at(t)).norm());
+        worst = worst.max((p.eval(0.0, t) - sides[3].at(t)).norm());
+    }
+    assert!(worst <= 1e-12, "side error {worst}");
+    // The sample points themselves lie on the patch border.
+    for q in &s[0] {
+        assert!(dist_polyline(*q, &s[0]) == 0.0);
+    }
+    // A triangle: the collapsed side is the corner.
+    let t = CoonsPatch::triangle(s[0].clone(), s[1].clone(), wavy(c[2], c[0], 5, 0.1, 3.0));
+    for i in 0..=10 {
+        assert!((t.eval(0.0, i as f64 / 10.0) - c[0]).norm() <= 1e-12);
+    }
+}
+
+#[test]
+fn coons_patch_reproduces_a_bilinear_patch() {
+    let (p00, p10, p01, p11) = (
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(2.0, 0.3, 0.5),
+        Vec3::new(0.2, 1.5, -0.4),
+        Vec3::new(1.8, 1.9, 1.1),
+    );
+    let bil = |u: f64, w: f64| {
+        p00 * ((1.0 - u) * (1.0 - w))
+            + p10 * (u * (1.0 - w))
+            + p01 * ((1.0 - u) * w)
+            + p11 * (u * w)
+    };
+    // Straight sides, unevenly sampled (chord length is the bilinear parameter on a straight side).
+    let ts = [0.0, 0.1, 0.35, 0.4, 0.8, 1.0];
+    let side = |f: &dyn Fn(f64) -> Vec3| ts.iter().map(|&t| f(t)).collect::<Vec<_>>();
+    let p = CoonsPatch::new(
+        Side::new(side(&|t| bil(t, 0.0))),
+        Side::new(side(&|t| bil(1.0, t))),
+        Side::new(side(&|t| bil(t, 1.0))),
+        Side::new(side(&|t| bil(0.0, t))),
+    );
+    for i in 0..=20 {
+        for j in 0..=20 {
+            let (u, w) = (i as f64 / 20.0, j as f64 / 20.0);
+            assert!((p.eval(u, w) - bil(u, w)).norm() <= 1e-12);
+        }
+    }
+}
+
+// ----- triquadrification ----------------------------------------------------------------------------
+
+/// One n-gon network: corners on a slightly wavy ellipse, wavy polylines.
+fn ngon_network(n: usize) -> Network {
+    let pts: Vec<[f64; 3]> = (0..n)
+        .map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / n as f64 + 0.1 * (k as f64).sin();
+            [0.1 * a.cos(), 0.08 * a.sin(), 0.01 * (3.0 * a).sin()]
+        })
+        .collect();
+    let q = pts.clone();
+    network_from_polygons(
+        &pts,
+        &[(0..n).collect()],
+        move |a, b| {
+            wavy(v(q[a]), v(q[b]), 12, 0.003, (a * 7 + b) as f64)
+                .into_iter()
+                .map(|p| p.to_array())
+                .collect()
+        },
+        |_, _| 0.0,
+    )
+}
+
+#[test]
+fn triquadrification_face_counts_on_n_gons() {
+    for n in 3..=12 {
+        let net = ngon_network(n);
+        let base = base_mesh(&net).unwrap();
+        let tq = triquadrify(&base, &TriquadOptions::default()).unwrap();
+        let want = match n {
+            3 | 4 => 1,
+            _ if n % 2 == 1 => (n - 1) / 2,
+            _ => (n - 2) / 2,
+        };
+        assert_eq!(tq.mesh.n_faces(), want, "{n}-gon");
+        let tris = tq
+            .mesh
+            .faces()
+            .filter(|&f| tq.mesh.face_valence(f) == 3)
+            .count();
+        assert_eq!(tris, n % 2, "{n}-gon: one triangle for odd n");
+        assert!(tq.mesh.faces().all(|f| tq.mesh.face_valence(f) <= 4));
+        let generated = tq.curves.iter().filter(|c| c.generated).count();
+        assert_eq!(generated, want - 1, "{n}-gon: faces − 1 new polylines");
+        assert!(tq.curves.iter().filter(|c| c.generated).all(|c| !c.sharp));
+        assert_spans_on_curves(&tq, 1e-12);
+    }
+}
+
+// ----- planarity, NULISSmod ----------------------------------------------------------------------
+
+/// A planar network in a tilted plane: three quads, a pentagon and a hexagon, with in-plane bent
+/// polylines.
+fn planar_network() -> (Network, Vec3, Vec3, f64) {
+    let origin = Vec3::new(0.2, -0.1, 0.4);
+    let (ex, ey) = (
+        Vec3::new(1.0, 0.2, 0.3).normalize_or_zero(),
+        Vec3::new(-0.1, 1.0, 0.5),
+    );
+    let n = ex.cross(ey).normalize_or_zero();
+    let ey = n.cross(ex);
+    let at = move |x: f64, y: f64| origin + ex * x + ey * y;
+    let mut pts = Vec::new();
+    for j in 0..3 {
+        for i in 0..4 {
+            pts.push(at(0.05 * i as f64 + 0.004 * j as f64, 0.05 * j as f64).to_array());
+        }
+    }
+    pts.push(at(0.075, -0.02).to_array()); // 12: bends the bottom of the middle cell
+    let faces = vec![
+        vec![0, 1, 5, 4],
+        vec![1, 12, 2, 6, 5],
+        vec![2, 3, 7, 6],
+        vec![4, 5, 9, 8],
+        vec![5, 6, 7, 11, 10, 9],
+    ];
+    let q = pts.clone();
+    let net = network_from_polygons(
+        &pts,
+        &faces,
+        move |a, b| {
+            let (pa, pb) = (v(q[a]), v(q[b]));
+            let side = n.cross(pb - pa);
+            (0..=10)
+                .map(|k| {
+                    let t = k as f64 / 10.0;
+                    (pa * (1.0 - t) + pb * t + side * (0.15 * (std::f64::consts::PI * t).sin()))
+                        .to_array()
+                })
+                .collect()
+        },
+        |_, _| 0.0,
+    );
+    (net, origin, n, 0.15)
+}
+
+#[test]
+fn a_planar_network_gives_a_planar_surface() {
+    let (net, origin, n, size) = planar_network();
+    for levels in [1, 2] {
+        let s = reconstruct_v1(
+            &net,
+            &V1Options {
+                levels,
+                ..V1Options::default()
+            },
+        )
+        .unwrap();
+        assert!(s.mesh.faces().all(|f| s.mesh.face_valence(f) == 4));
+        let worst = s
+            .mesh
+            .vertices()
+            .map(|x| (s.mesh.position(x) - origin).dot(n).abs())
+            .fold(0.0, f64::max);
+        assert!(worst <= 1e-9 * size, "off-plane {worst} at {levels} levels");
+    }
+}
+
+/// A curved network: a 3 × 3 quad patch of a saddle.
+fn saddle_network() -> Network {
+    let f = |s: f64, t: f64| {
+        let (x, y) = (s - 0.5, t - 0.5);
+        [0.2 * x, 0.2 * y, 0.1 * (x * x - y * y)]
+    };
+    parametric_network(&f, 3, 3, (false, false), 12)
+}
+
+#[test]
+fn nuliss_mod_keeps_old_vertices_and_puts_edge_points_on_the_polylines() {
+    let net = saddle_network();
+    let refined = refined_v1(&net, &V1Options::default()).unwrap();
+    assert!(refined
+        .mesh
+        .faces()
+        .all(|f| refined.mesh.face_valence(f) == 4));
+    // The refined mesh's vertices are on the polylines (curve vertices) or patch centres.
+    let s = nuliss_mod(&refined, &NulissOptions::default()).unwrap();
+    let nv = refined.mesh.n_vertices();
+    for x in refined.mesh.vertices() {
+        assert_eq!(
+            s.mesh.position(x),
+            refined.mesh.position(x),
+            "old vertex {x} moved"
+        );
+        assert_eq!(s.tag(x), refined.tag(x));
+    }
+    assert_eq!(
+        s.mesh.n_vertices(),
+        nv + refined.mesh.n_edges() + refined.mesh.n_faces()
+    );
+    let mut checked = 0;
+    for e in refined.mesh.edges() {
+        let Some(sp) = refined.span(e) else { continue };
+        let ev = fires_recon::mesh::Vertex::new(nv + checked_index(&refined, e));
+        let p = s.mesh.position(ev);
+        let c = &refined.curves[sp.curve];
+        let d = dist_polyline(p, &c.points);
+        assert!(d <= 1e-12, "edge point {ev} is {d} m off its polyline");
+        checked += 1;
+    }
+    assert!(
+        checked == refined.mesh.n_edges(),
+        "every refined edge follows a curve"
+    );
+    // Without snapping, the interpolatory edge points leave the curves.
+    let plain = nuliss_mod(
+        &refined,
+        &NulissOptions {
+            snap_to_curves: false,
+        },
+    )
+    .unwrap();
+    let off = refined
+        .mesh
+        .edges()
+        .map(|e| {
+            let sp = refined.span(e).unwrap();
+            let p = plain
+                .mesh
+                .position(fires_recon::mesh::Vertex::new(nv + e.idx()));
+            dist_polyline(p, &refined.curves[sp.curve].points)
+        })
+        .fold(0.0, f64::max);
+    assert!(
+        off > 1e-6,
+        "the snap must matter on a curved network ({off})"
+    );
+}
+
+/// Edge point of edge `e` is vertex `n_vertices + (rank of e among the edges)` (compact meshes: e.idx()).
+fn checked_index(cm: &ControlMesh, e: fires_recon::mesh::Edge) -> usize {
+    assert!(!cm.mesh.has_garbage());
+    e.idx()
+}
+
+// ----- the thesis's validation (§7.2): known surface, curves along a coarse quad mesh, V1 -----------
+
+use common::netgen::MeshDistance;
+use std::f64::consts::{PI, TAU};
+
+/// Two-sided Hausdorff distance between the reconstruction and a known surface: `dist` gives a point's
+/// distance to the known surface, `truth` samples it densely.
+fn hausdorff(s: &ControlMesh, dist: &dyn Fn(Vec3) -> f64, truth: &[Vec3]) -> (f64, f64) {
+    let m = &s.mesh;
+    let mut fwd: f64 = 0.0;
+    for x in m.vertices() {
+        fwd = fwd.max(dist(m.position(x)));
+    }
+    for f in m.faces() {
+        let c = m
+            .face_vertices(f)
+            .map(|x| m.position(x))
+            .fold(Vec3::ZERO, |a, p| a + p)
+            / m.face_valence(f) as f64;
+        fwd = fwd.max(dist(c));
+    }
+    let q = MeshDistance::new(m);
+    let back = truth.iter().map(|&p| q.distance(p)).fold(0.0, f64::max);
+    (fwd, back)
+}
+
+fn diag(pts: &[Vec3]) -> f64 {
+    let lo = pts
+        .iter()
+        .fold(Vec3::new(f64::MAX, f64::MAX, f64::MAX), |a, p| {
+            Vec3::new(a.x.min(p.x), a.y.min(p.y), a.z.min(p.z))
+        });
+    let hi = pts
+        .iter()
+        .fold(Vec3::new(f64::MIN, f64::MIN, f64::MIN), |a, p| {
+            Vec3::new(a.x.max(p.x), a.y.max(p.y), a.z.max(p.z))
+        });
+    (hi - lo).norm()
+}
+
+fn grid_samples(f: &dyn Fn(f64, f64) -> [f64; 3], n: usize) -> Vec<Vec3> {
+    (0..=n)
+        .flat_map(|j| (0..=n).map(move |i| (i, j)))
+        .map(|(i, j)| v(f(i as f64 / n as f64, j as f64 / n as f64)))
+        .collect()
+}
+
+/// A cube's surface, `n × n` quads per side, outward, with its vertices pushed onto the sphere of radius
+/// `r` and each edge's polyline the projection of the straight cube edge.
+fn cube_sphere_network(n: usize, r: f64, samples: usize) -> Network {
+    let mut index = std::collections::HashMap::new();
+    let mut pts: Vec<[f64; 3]> = Vec::new();
+    let lattice: Vec<[usize; 3]> = (0..=n)
+        .flat_map(|i| (0..=n).flat_map(move |j| (0..=n).map(move |k| [i, j, k])))
+        .filter(|p| p.iter().any(|&c| c == 0 || c == n))
+        .collect();
+    let cube_pt = |p: [usize; 3]| p.map(|c| c as f64 / n as f64 - 0.5);
+    let project = move |q: [f64; 3]| {
+        let l = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+        q.map(|c| c / l * r)
+    };
+    for p in &lattice {
+        index.insert(*p, pts.len());
+        pts.push(project(cube_pt(*p)));
+    }
+    let mut faces = Vec::new();
+    for axis in 0..3 {
+        let (a1, a2) = ((axis + 1) % 3, (axis + 2) % 3);
+        for side in [0, n] {
+            for i in 0..n {
+                for j in 0..n {
+                    let at = |di: usize, dj: usize| {
+                        let mut p = [0; 3];
+                        p[axis] = side;
+                        p[a1] = i + di;
+                        p[a2] = j + dj;
+                        index[&p]
+                    };
+                    let mut q = vec![at(0, 0), at(1, 0), at(1, 1), at(0, 1)];
+                    if side == 0 {
+                        q.reverse();
+                    }
+                    faces.push(q);
+                }
+            }
+        }
+    }
+    let lat = lattice.clone();
+    network_from_polygons(
+        &pts,
+        &faces,
+        move |a, b| {
+            let (pa, pb) = (cube_pt(lat[a]), cube_pt(lat[b]));
+            (0..=samples)
+                .map(|k| {
+                    let t = k as f64 / samples as f64;
+                    project([0, 1, 2].map(|d| pa[d] + t * (pb[d] - pa[d])))
+                })
+                .collect()
+        },
+        |_, _| 0.0,
+    )
+}
+
+#[test]
+fn v1_reconstructs_known_surfaces_within_half_a_percent_of_the_diagonal() {
+    let opts = V1Options::default();
+    let mut report = Vec::new();
+    // 1. A torus (genus 1): R = 0.1 m, r = 0.04 m, 8 × 6 coarse quads.
+    let (rr, r) = (0.1, 0.04);
+    let torus = move |s: f64, t: f64| {
+        let (a, b) = (TAU * s, TAU * t);
+        let rho = rr + r * b.cos();
+        [rho * a.cos(), rho * a.sin(), r * b.sin()]
+    };
+    let net = parametric_network(&torus, 8, 6, (true, true), 16);
+    let s = reconstruct_v1(&net, &opts).unwrap();
+    let truth = grid_samples(&torus, 120);
+    let d = |p: Vec3| (((p.x * p.x + p.y * p.y).sqrt() - rr).hypot(p.z) - r).abs();
+    report.push((
+        "torus 8x6",
+        s.mesh.n_vertices(),
+        hausdorff(&s, &d, &truth),
+        diag(&truth),
+    ));
+    // 2. A sphere from a cube's 2 × 2-per-side quads (valence-3 corners), R = 0.08 m.
+    let rs = 0.08;
+    let net = cube_sphere_network(2, rs, 16);
+    let s = reconstruct_v1(&net, &opts).unwrap();
+    let truth: Vec<Vec3> = (0..=60)
+        .flat_map(|j| (0..=120).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            let (a, b) = (TAU * i as f64 / 120.0, PI * j as f64 / 60.0);
+            Vec3::new(b.sin() * a.cos(), b.sin() * a.sin(), b.cos()) * rs
+        })
+        .collect();
+    let d = |p: Vec3| (p.norm() - rs).abs();
+    report.push((
+        "cube-sphere 2x2x6",
+        s.mesh.n_vertices(),
+        hausdorff(&s, &d, &truth),
+        diag(&truth),
+    ));
+    // 3. A bumpy height field with a boundary, 0.2 m square, 5 × 5 coarse quads.
+    let h = |s: f64, t: f64| 0.02 * (TAU * s).sin() * (PI * t).cos() + 0.01 * (3.0 * PI * t).sin();
+    let bumpy = move |s: f64, t: f64| [0.2 * s, 0.2 * t, h(s, t)];
+    let net = parametric_network(&bumpy, 5, 5, (false, false), 16);
+    let s = reconstruct_v1(&net, &opts).unwrap();
+    let truth = grid_samples(&bumpy, 100);
+    // Vertical gap: an upper bound of the distance to the height field.
+    let d = |p: Vec3| (p.z - h(p.x / 0.2, p.y / 0.2)).abs();
+    report.push((
+        "bumpy grid 5x5",
+        s.mesh.n_vertices(),
+        hausdorff(&s, &d, &truth),
+        diag(&truth),
+    ));
+    for (name, nv, (fwd, back), dg) in &report {
+        let hd = fwd.max(*back);
+        eprintln!(
+            "{name}: {nv} vertices, Hausdorff {:.3} mm (surface→truth {:.3}, truth→surface {:.3}) = {:.3} % of the {:.1} mm diagonal",
+            hd * 1e3,
+            fwd * 1e3,
+            back * 1e3,
+            100.0 * hd / dg,
+            dg * 1e3
+        );
+    }
+    for (name, _, (fwd, back), dg) in &report {
+        assert!(fwd.max(*back) <= 0.005 * dg, "{name}");
+    }
+}
+
+// ----- basic refinement, networks from the sketching tools ------------------------------------------
+
+use fires_recon::surface::{refine, RefineOptions};
+
+#[test]
+fn basic_refinement_gives_quads_with_every_vertex_on_a_polyline() {
+    for n in [4, 5, 7] {
+        let tq = triquadrify(
+            &base_mesh(&ngon_network(n)).unwrap(),
+            &TriquadOptions::default(),
+        )
+        .unwrap();
+        let (q, t) = tq.mesh.faces().fold((0, 0), |(q, t), f| {
+            if tq.mesh.face_valence(f) == 4 {
+                (q + 1, t)
+            } else {
+                (q, t + 1)
+            }
+        });
+        for (steps, match_density) in [(1, true), (2, true), (2, false), (3, true)] {
+            let r = refine(
+                &tq,
+                &RefineOptions {
+                    steps,
+                    match_density,
+                },
+            )
+            .unwrap();
+            assert!(r.mesh.faces().all(|f| r.mesh.face_valence(f) == 4));
+            let p = 4usize.pow(steps as u32);
+            assert_eq!(
+                r.mesh.n_faces(),
+                q * p + t * 3 * p / 4,
+                "{n}-gon, {steps} steps"
+            );
+            assert!(
+                r.mesh.edges().all(|e| r.span(e).is_some()),
+                "every edge follows a polyline"
+            );
+            assert_spans_on_curves(&r, 1e-12);
+        }
+    }
+}
+
+#[test]
+fn a_disc_sketched_with_the_tools_reconstructs_flat() {
+    use common::disc::{vertical, Z};
+    use fires_recon::network::tools::{insert_curve, InsertOptions};
+    let mut net = Network::new();
+    insert_boundary(
+        &mut net,
+        CurveInput::new(&circle(400)),
+        &BoundaryOptions::default(),
+    )
+    .unwrap();
+    for x in [-0.05, 0.0, 0.05] {
+        insert_curve(
+            &mut net,
+            CurveInput::new(&vertical(x)),
+            &InsertOptions::default(),
+        )
+        .unwrap();
+    }
+    let s = reconstruct_v1(&net, &V1Options::default()).unwrap();
+    assert!(s.mesh.faces().all(|f| s.mesh.face_valence(f) == 4));
+    let worst = s
+        .mesh
+        .vertices()
+        .map(|x| (s.mesh.position(x).z - Z).abs())
+        .fold(0.0, f64::max);
+    assert!(worst <= 1e-9 * 0.2, "off-plane {worst}");
+    // The drawn curves are kept: every curve vertex is on its curve.
+    for x in s.mesh.vertices() {
+        if let VertexTag::OnCurve(p) = s.tag(x) {
+            let d = (s.mesh.position(x) - s.curves[p.curve].point_at(p.t)).norm();
+            assert!(d <= 1e-12, "curve vertex {x} is {d} m off");
+        }
+    }
+}
+
+#[test]
+fn a_sharp_cube_network_stays_on_the_cube_faces() {
+    // Distance of a point to the surface of the cube [0, 0.1]³.
+    let to_cube = |p: Vec3| {
+        let d = [p.x, p.y, p.z]
+            .iter()
+            .map(|&c| c.abs().min((c - 0.1).abs()))
+            .fold(f64::INFINITY, f64::min);
+        let inside = [p.x, p.y, p.z]
+            .iter()
+            .all(|&c| (-1e-12..=0.1 + 1e-12).contains(&c));
+        if inside {
+            d
+        } else {
+            f64::INFINITY
+        }
+    };
+    let worst_off = |s: &ControlMesh| {
+        s.mesh
+            .vertices()
+            .map(|x| to_cube(s.mesh.position(x)))
+            .fold(0.0, f64::max)
+    };
+    // The whole of V1 on the sharp cube keeps every vertex on the cube's faces.
+    let sharp = reconstruct_v1(&cube_network(1.0), &V1Options::default()).unwrap();
+    assert!(
+        worst_off(&sharp) <= 1e-9 * 0.1,
+        "sharp cube: {}",
+        worst_off(&sharp)
+    );
+    // The interpolatory rules themselves (no snapping): the sharp rules keep each side of a crease to
+    // itself; without sharp curves the four-point rule reaches across the cube's edges and bulges.
+    let plain = NulissOptions {
+        snap_to_curves: false,
+    };
+    let opts = V1Options::default();
+    let s = nuliss_mod(&refined_v1(&cube_network(1.0), &opts).unwrap(), &plain).unwrap();
+    assert!(
+        worst_off(&s) <= 1e-9 * 0.1,
+        "sharp rules: {}",
+        worst_off(&s)
+    );
+    let s = nuliss_mod(&refined_v1(&cube_network(0.0), &opts).unwrap(), &plain).unwrap();
+    assert!(worst_off(&s) > 1e-4, "smooth rules: {}", worst_off(&s));
+}

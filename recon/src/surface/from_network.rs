@@ -40,6 +40,27 @@ pub(crate) struct Builder {
 }
 
 impl Builder {
+    /// A builder holding `cm`'s vertices, tags, curves and curve spans, without its faces.
+    pub fn from_control(cm: &ControlMesh) -> Self {
+        let m = &cm.mesh;
+        let mut spans = HashMap::with_capacity(m.n_edges());
+        for e in m.edges() {
+            if let Some(s) = cm.span(e) {
+                let (a, b) = m.edge_vertices(e);
+                spans.insert((a.idx(), b.idx()), s);
+            }
+        }
+        let mut tags = cm.vertex_tag.clone();
+        tags.resize(m.vertices_size(), VertexTag::Free);
+        Builder {
+            points: m.positions().to_vec(),
+            tags,
+            faces: Vec::new(),
+            spans,
+            curves: cm.curves.clone(),
+        }
+    }
+
     /// Adds a vertex and returns its index.
     pub fn vertex(&mut self, p: Vec3, tag: VertexTag) -> usize {
         self.points.push(p);
@@ -122,7 +143,7 @@ pub fn base_mesh(net: &Network) -> Result<ControlMesh, SurfaceError> {
         let mut curve = Curve::new(points, pl.attrs.sharpness >= 0.5);
         curve.source = Some(ed.polyline.idx());
         let len = curve.length();
-        if !(len > 0.0) {
+        if len.is_nan() || len <= 0.0 {
             return Err(SurfaceError::Degenerate(format!(
                 "edge {e}'s polyline has zero length"
             )));
