@@ -168,7 +168,7 @@ fn a_cube_with_sharp_edges() {
     let (jump, n) = normal_jump_deg(&c, true);
     eprintln!("cube: {} v, face planarity {worst:.2e}, off the cube {off_cube:.2e}, crease angle {jump:.3}° over {n}", c.mesh.n_vertices());
     assert!(off_cube <= 0.005 * edge);
-    assert!(n > 0 && jump >= 80.0 && jump <= 100.0, "{jump}");
+    assert!(n > 0 && (80.0..=100.0).contains(&jump), "{jump}");
 }
 
 #[test]
@@ -241,9 +241,11 @@ fn tessellation_makes_sixteen_n_quads_with_curve_vertices_on_the_curves() {
 #[test]
 fn hard_constraints_keep_every_curve_vertex_exactly() {
     let base = sphere_network(1.0);
-    let mut o = V2Options::default();
-    o.diffusion = DiffusionOptions {
-        hard: true,
+    let o = V2Options {
+        diffusion: DiffusionOptions {
+            hard: true,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let t = tessellate(&base, &o.tessellate).unwrap();

@@ -20,13 +20,14 @@
 //! # Keeping the curves ([`CurveKeeping`])
 //! Catmull-Clark approximates: left alone it pulls the surface off the drawn curves (a crease's limit is the
 //! cubic B-spline of its vertices). Two remedies, chosen by [`CatmullClarkOptions::keep`]:
-//! * [`CurveKeeping::Snap`] (FIRES thesis §6.3, NULISSmod's edge rule): every curve vertex is
+//! * [`CurveKeeping::Snap`] (the default; FIRES thesis §6.3, NULISSmod's edge rule): every curve vertex is
 //!   put at its curve point (its parameter's point on the polyline) and every curve edge's edge point at its
-//!   span's mid-parameter point. All other points use the rules above, so the vertices next to a non-sharp
-//!   curve average both sides and the surface bends smoothly across it; the price is a ridge along the curve (the
-//!   Catmull-Clark shrinkage undone on the curve only): measured on the sphere of three great circles, the
-//!   normals across the curves differ by 25° after three levels, so this mode suits sharp curves only;
-//! * [`CurveKeeping::Limit`] (the default; Schaefer, Warren & Zorin, *Lofting curve networks using subdivision surfaces*,
+//!   span's mid-parameter point. All other points use the rules above (the vertices next to a non-sharp
+//!   curve average both sides), but undoing the Catmull-Clark shrinkage on the curve only leaves a ridge
+//!   along it: measured on the sphere of three great circles, the
+//!   normals across the curves differ by 25° after three levels, so this mode suits sharp curves, or levels
+//!   followed by ones of another kind;
+//! * [`CurveKeeping::Limit`] (FIRESV2's choice; Schaefer, Warren & Zorin, *Lofting curve networks using subdivision surfaces*,
 //!   SGP 2004, §4, in spirit: move the control points so that the limit surface passes through the curves):
 //!   before the step, the curve vertices are moved (Gauss-Seidel on the limit stencils) so that their
 //!   Catmull-Clark limit positions are their curve points, then the plain rules apply; finish with
@@ -45,16 +46,17 @@ pub enum CurveKeeping {
     /// Plain sharp Catmull-Clark: the surface leaves the curves.
     None,
     /// Curve vertices and curve edge points are put on their curves.
+    #[default]
     Snap,
     /// Curve vertices are moved so the limit surface passes through their curve points.
-    #[default]
     Limit,
 }
 
 /// Options of [`catmull_clark`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CatmullClarkOptions {
-    /// How the curves are kept (default [`CurveKeeping::Limit`]).
+    /// How the curves are kept (default [`CurveKeeping::Snap`], exact at every level; FIRESV2 uses
+    /// [`CurveKeeping::Limit`], see the module docs).
     pub keep: CurveKeeping,
     /// Boundary edges are creases (the usual boundary rules); default true.
     pub boundary_is_crease: bool,
@@ -65,7 +67,7 @@ pub struct CatmullClarkOptions {
 impl Default for CatmullClarkOptions {
     fn default() -> Self {
         Self {
-            keep: CurveKeeping::Limit,
+            keep: CurveKeeping::Snap,
             boundary_is_crease: true,
             limit_fit_sweeps: 8,
         }

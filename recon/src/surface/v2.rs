@@ -24,7 +24,8 @@ pub struct V2Options {
     pub tessellate: TessellateOptions,
     /// The surface-diffusion flow (the thesis's defaults).
     pub diffusion: DiffusionOptions,
-    /// The final subdivision's rules and curve keeping.
+    /// The final subdivision's rules and curve keeping (default [`CurveKeeping::Limit`]: tangent-continuous
+    /// across the smooth curves, and through them after the final limit projection).
     pub subdivision: CatmullClarkOptions,
     /// Catmull-Clark levels after the flow; `None` chooses them from [`Self::max_vertices`].
     pub levels: Option<usize>,
@@ -43,7 +44,10 @@ impl Default for V2Options {
         Self {
             tessellate: TessellateOptions::default(),
             diffusion: DiffusionOptions::default(),
-            subdivision: CatmullClarkOptions::default(),
+            subdivision: CatmullClarkOptions {
+                keep: CurveKeeping::Limit,
+                ..CatmullClarkOptions::default()
+            },
             levels: None,
             max_vertices: 40_000,
             max_levels: 3,
