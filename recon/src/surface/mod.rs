@@ -14,22 +14,30 @@
 mod catmull_clark;
 mod control;
 mod coons;
+mod diffusion;
 mod error;
 mod from_network;
 mod nuliss;
+mod quad_cotan;
 mod refine;
+mod tessellate;
 mod triquad;
 mod v1;
+mod v2;
 
 pub use catmull_clark::{
-    catmull_clark, catmull_clark_n, curve_target, limit_positions, CatmullClarkError,
+    catmull_clark, catmull_clark_n, curve_target, interpolating_control, limit_positions,
     CatmullClarkOptions, CurveKeeping,
 };
 pub use control::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};
 pub use coons::{chord_params, span_points, CoonsPatch, Side};
+pub use diffusion::{surface_diffusion, CurvatureField, DiffusionOptions, SurfaceDiffusion};
 pub use error::SurfaceError;
 pub use from_network::base_mesh;
 pub use nuliss::{nuliss_mod, nuliss_mod_n, NulissOptions};
+pub use quad_cotan::{vertex_normals_at, QuadCotan};
 pub use refine::{refine, refine_step, RefineOptions};
+pub use tessellate::{tessellate, tessellate_step, TessellateOptions};
 pub use triquad::{triquadrify, TriquadOptions};
 pub use v1::{reconstruct_v1, refined_v1, subdivide_v1, without_generated, V1Options};
+pub use v2::{reconstruct_v2, reconstruct_v2_from_base, subdivide, v2_refined, V2Options};

@@ -1,0 +1,315 @@
+//! FIRESV2's surface-diffusion flow (FIRES thesis §6.4.1, eqs. 6.1–6.8): the surface relaxes towards
+//! `Δ_M H = 0` (surface diffusion, whose fixed points include spheres, cylinders and minimal surfaces)
+//! while its curve vertices stay on the drawn curves. Each outer iteration runs two second-order steps:
+//!
+//! * **STEP 1** (eq. 6.3, backward Euler, `inner_steps` times): `(M + τh̄²K_w) f⁺ = M f`, diffusing the
+//!   curvature field `f` with the sharpness-weighted Laplacian;
+//! * **STEP 2** (eqs. 6.4, 6.7–6.8): `min_X ‖C X − M δ̃‖² + λ‖S X − X₀‖²` (soft, the default) or the same
+//!   with `S X = X₀` imposed exactly ([`DiffusionOptions::hard`]).
+//!
+//! Operators ([`super::quad_cotan`]): `C` the cotangent matrix of the averaged quad triangulation
+//! (symmetric, negative semidefinite), `M` the barycentric vertex areas, `L = M⁻¹C ≈ Δ`, `K_w` the
+//! stiffness with sharpness weights, `S` the selection of the curve vertices (tagged on a curve or a
+//! corner), `h̄` the mean edge length of the input.
+//!
+//! Each choice the thesis leaves open or prints inconsistently, and what is done here:
+//! * **Sign.** The field is the δ-coordinates `δ = L X` computed with the same discrete `L` that STEP 2
+//!   fits (the thesis writes both `H⃗ = −ΔX` and `min ‖LX − H⃗‖`); `δ = −H⃗ = −2H N`. So diffusing and
+//!   refitting `δ` never flips a sign, and a mesh with `δ̃ = δ` is a fixed point.
+//! * **Data term.** STEP 2 is restoring: it pulls towards `X₀` (the thesis's eq. 6.2 prints `+λ(X − X₀)`,
+//!   which as a flow would push away). `C` has λ-weighted identity rows below it (`A = [C; √λ S]`,
+//!   `b = [M δ̃; √λ X₀]`): `S` is a `|X₀| × |X|` row selection, the unknown is `X` alone.
+//! * **Scale.** STEP 2 fits `C X ≈ M δ̃` (the `L` rows multiplied by the vertex areas), so both terms are
+//!   squared lengths and λ means the same at any size or resolution; STEP 1's time step is `τ h̄²`, so
+//!   τ ∈ [0.1, 1] is in units of the grid, as the thesis intends ("τ of the order of the grid size").
+//! * **Symmetry.** The weights `W_ij = exp(−|S_i − S_j|/σ²)` (S = number of sharp edges at a vertex) are
+//!   used unnormalised: the thesis's `1/Z(i)` makes `W` non-symmetric, and its own SPD rewriting needs a
+//!   symmetric matrix. With σ = 0.2, crease, corner and smooth vertices are decoupled (`e⁻²⁵`). Negative
+//!   cotangent weights are clamped to 0 in `K_w` only (STEP 1 then has an M-matrix, SPD for any mesh);
+//!   STEP 2 keeps them (its normal matrix `CᵀC` is PSD anyway, and linear precision keeps planes planar).
+//! * **Field.** [`CurvatureField::Scalar`] (default) diffuses the signed mean curvature `δ·n` and rebuilds
+//!   `δ̃ = (δ·n)~ n` with the current normals: a constant-mean-curvature surface (a sphere) is then a fixed
+//!   point, as eq. 6.1 promises. [`CurvatureField::Vector`] diffuses `δ` componentwise as printed in
+//!   eq. 6.3; that shrinks the normal field's length on curved surfaces and flattens them slightly.
+//! * **Operators per iteration.** `C`, `M`, `K_w` are rebuilt from the current positions at every outer
+//!   iteration ([`DiffusionOptions::update_operators`]); the sparsity pattern is the mesh's, so only the
+//!   numeric Cholesky factorisations are redone (the symbolic analyses are made once, in
+//!   [`SurfaceDiffusion::new`]).
+
+use faer::Mat;
+
+use super::control::{ControlMesh, VertexTag};
+use super::error::SurfaceError;
+use super::quad_cotan::{vertex_normals_at, Assembly, QuadCotan};
+use crate::geometry::Vec3;
+use crate::solve::{
+    sparse_mul_dense, CholeskyOptions, CholeskySolver, FixedSolver, SolveError, SparseMatrix,
+};
+use faer::reborrow::ReborrowMut;
+use faer::sparse::linalg::matmul::sparse_sparse_matmul;
+use faer::Par;
+
+/// Which curvature field STEP 1 diffuses (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum CurvatureField {
+    /// The signed mean curvature along the vertex normals (CMC surfaces are fixed points).
+    #[default]
+    Scalar,
+    /// The δ-coordinate vectors, componentwise (eq. 6.3 as printed).
+    Vector,
+}
+
+/// Options of [`surface_diffusion`]; the defaults are the thesis's (§7.3).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DiffusionOptions {
+    /// Weight λ of the curve-vertex positions in STEP 2 (default 1).
+    pub lambda: f64,
+    /// Sharpness kernel width σ (default 0.2).
+    pub sigma: f64,
+    /// STEP 1 time step τ in units of the squared mean edge length (default 0.5).
+    pub tau: f64,
+    /// STEP 1 backward-Euler steps per outer iteration (default 5).
+    pub inner_steps: usize,
+    /// Outer iterations (default 5).
+    pub outer_iterations: usize,
+    /// Curve vertices fixed exactly instead of the λ-weighted soft constraint (default false).
+    pub hard: bool,
+    /// Which curvature field is diffused (default scalar).
+    pub field: CurvatureField,
+    /// Rebuild the operators from the current positions at every outer iteration (default true).
+    pub update_operators: bool,
+}
+
+impl Default for DiffusionOptions {
+    fn default() -> Self {
+        Self {
+            lambda: 1.0,
+            sigma: 0.2,
+            tau: 0.5,
+            inner_steps: 5,
+            outer_iterations: 5,
+            hard: false,
+            field: CurvatureField::Scalar,
+            update_operators: true,
+        }
+    }
+}
+
+fn solve_err(e: SolveError) -> SurfaceError {
+    SurfaceError::Degenerate(format!("surface diffusion solve: {e}"))
+}
+
+enum Step2 {
+    Soft(CholeskySolver),
+    Hard(FixedSolver),
+}
+
+/// The precomputed flow on one control mesh: constrained set, sharpness, symbolic factorisations.
+pub struct SurfaceDiffusion {
+    opts: DiffusionOptions,
+    c: ControlMesh,
+    centre: Vec3,
+    x0: Vec<Vec3>,
+    constrained: Vec<usize>,
+    sharp_count: Vec<f64>,
+    h2: f64,
+    ops: QuadCotan,
+    asm: Assembly,
+    cmat: SparseMatrix,
+    step1: CholeskySolver,
+    step2: Step2,
+}
+
+impl SurfaceDiffusion {
+    /// Analyses and factorises the two systems of `c` at its current positions (which are `X₀`).
+    pub fn new(c: &ControlMesh, opts: &DiffusionOptions) -> Result<Self, SurfaceError> {
+        let m = &c.mesh;
+        if m.has_garbage() {
+            return Err(SurfaceError::BadControlMesh(
+                "the mesh has deleted elements".into(),
+            ));
+        }
+        let constrained: Vec<usize> = m
+            .vertices()
+            .filter(|&v| c.tag(v) != VertexTag::Free)
+            .map(|v| v.idx())
+            .collect();
+        if constrained.is_empty() {
+            return Err(SurfaceError::Degenerate(
+                "no curve vertex to hold the surface".into(),
+            ));
+        }
+        let x0 = m.positions().to_vec();
+        if x0.iter().any(|p| !p.is_finite()) {
+            return Err(SurfaceError::Degenerate("non-finite vertex".into()));
+        }
+        // Solve about the centroid: the operators annihilate translations, and small coordinates keep the
+        // normal equations' rounding small (a plane at z = 0.5 m stays flat to 1e-12 m, not 1e-9 m).
+        let centre = x0.iter().fold(Vec3::ZERO, |s, &p| s + p) / x0.len().max(1) as f64;
+        let x0: Vec<Vec3> = x0.into_iter().map(|p| p - centre).collect();
+        let sharp_count: Vec<f64> = m.vertices().map(|v| c.sharp_valence(v) as f64).collect();
+        let mean_edge = if m.n_edges() > 0 {
+            m.edges().map(|e| m.edge_length(e)).sum::<f64>() / m.n_edges() as f64
+        } else {
+            0.0
+        };
+        if mean_edge <= 0.0 || !mean_edge.is_finite() {
+            return Err(SurfaceError::Degenerate("zero-length edges".into()));
+        }
+        let ops = QuadCotan::new(m, &x0);
+        let asm = Assembly::new(x0.len(), &ops.pairs).map_err(solve_err)?;
+        let h2 = mean_edge * mean_edge;
+        let (a1, a2, cmat) = matrices(opts, &asm, &ops, &sharp_count, &constrained, h2)?;
+        let step1 =
+            CholeskySolver::new(a1.as_ref(), CholeskyOptions::default()).map_err(solve_err)?;
+        let step2 = if opts.hard {
+            Step2::Hard(
+                FixedSolver::precompute(a2.as_ref(), &constrained, CholeskyOptions::default())
+                    .map_err(solve_err)?,
+            )
+        } else {
+            Step2::Soft(
+                CholeskySolver::new(a2.as_ref(), CholeskyOptions::default()).map_err(solve_err)?,
+            )
+        };
+        Ok(Self {
+            opts: *opts,
+            c: c.clone(),
+            centre,
+            x0,
+            constrained,
+            sharp_count,
+            h2,
+            ops,
+            asm,
+            cmat,
+            step1,
+            step2,
+        })
+    }
+
+    /// Runs the outer iterations from `X₀` and returns the control mesh at the new positions.
+    pub fn run(&mut self) -> Result<ControlMesh, SurfaceError> {
+        let n = self.x0.len();
+        let mut x = self.x0.clone();
+        let mut c = self.cmat.clone();
+        for it in 0..self.opts.outer_iterations {
+            if it > 0 && self.opts.update_operators {
+                self.ops = QuadCotan::new(&self.c.mesh, &x);
+                let (a1, a2, c_new) = matrices(
+                    &self.opts,
+                    &self.asm,
+                    &self.ops,
+                    &self.sharp_count,
+                    &self.constrained,
+                    self.h2,
+                )?;
+                self.step1.factorize(a1.as_ref()).map_err(solve_err)?;
+                match &mut self.step2 {
+                    Step2::Soft(s) => s.factorize(a2.as_ref()).map_err(solve_err)?,
+                    Step2::Hard(s) => s.refactorize(a2.as_ref()).map_err(solve_err)?,
+                }
+                c = c_new;
+            }
+            let area: Vec<f64> = self.ops.area.iter().map(|a| a.max(1e-300)).collect();
+            let xm = Mat::from_fn(n, 3, |i, k| x[i][k]);
+            // δ = M⁻¹ C X.
+            let cx = sparse_mul_dense(c.as_ref(), xm.as_ref()).map_err(solve_err)?;
+            let delta: Vec<Vec3> = (0..n)
+                .map(|i| Vec3::new(cx[(i, 0)], cx[(i, 1)], cx[(i, 2)]) / area[i])
+                .collect();
+            let normals = vertex_normals_at(&self.c.mesh, &x);
+            let mut field = match self.opts.field {
+                CurvatureField::Scalar => Mat::from_fn(n, 1, |i, _| delta[i].dot(normals[i])),
+                CurvatureField::Vector => Mat::from_fn(n, 3, |i, k| delta[i][k]),
+            };
+            for _ in 0..self.opts.inner_steps {
+                for i in 0..n {
+                    for k in 0..field.ncols() {
+                        field[(i, k)] *= area[i];
+                    }
+                }
+                self.step1
+                    .solve_in_place(field.as_mut())
+                    .map_err(solve_err)?;
+            }
+            let target: Vec<Vec3> = (0..n)
+                .map(|i| match self.opts.field {
+                    CurvatureField::Scalar => normals[i] * field[(i, 0)],
+                    CurvatureField::Vector => {
+                        Vec3::new(field[(i, 0)], field[(i, 1)], field[(i, 2)])
+                    }
+                })
+                .collect();
+            // STEP 2 right-hand side Cᵀ M δ̃ (+ λ Sᵀ X₀ when soft); C is symmetric.
+            let md = Mat::from_fn(n, 3, |i, k| area[i] * target[i][k]);
+            let mut rhs = sparse_mul_dense(c.as_ref(), md.as_ref()).map_err(solve_err)?;
+            let sol = match &self.step2 {
+                Step2::Soft(s) => {
+                    for &i in &self.constrained {
+                        for k in 0..3 {
+                            rhs[(i, k)] += self.opts.lambda * self.x0[i][k];
+                        }
+                    }
+                    s.solve_in_place(rhs.as_mut()).map_err(solve_err)?;
+                    rhs
+                }
+                Step2::Hard(s) => {
+                    let known = Mat::from_fn(s.known().len(), 3, |r, k| self.x0[s.known()[r]][k]);
+                    s.solve(rhs.as_ref(), known.as_ref()).map_err(solve_err)?
+                }
+            };
+            for (i, p) in x.iter_mut().enumerate() {
+                *p = Vec3::new(sol[(i, 0)], sol[(i, 1)], sol[(i, 2)]);
+            }
+            if x.iter().any(|p| !p.is_finite()) {
+                return Err(SurfaceError::Degenerate(
+                    "surface diffusion diverged (non-finite positions)".into(),
+                ));
+            }
+        }
+        let mut out = self.c.clone();
+        for (q, p) in out.mesh.positions_mut().iter_mut().zip(&x) {
+            *q = *p + self.centre;
+        }
+        Ok(out)
+    }
+}
+
+/// `(STEP 1 matrix M + τh̄²K_w, STEP 2 normal matrix, C)` at the current operators.
+fn matrices(
+    opts: &DiffusionOptions,
+    asm: &Assembly,
+    ops: &QuadCotan,
+    sharp_count: &[f64],
+    constrained: &[usize],
+    h2: f64,
+) -> Result<(SparseMatrix, SparseMatrix, SparseMatrix), SurfaceError> {
+    let n = ops.area.len();
+    let s2 = (opts.sigma * opts.sigma).max(1e-300);
+    let s = sharp_count;
+    let w = |i: usize, j: usize| (-(s[i] - s[j]).abs() / s2).exp();
+    let dt = opts.tau * h2;
+    // M − τh̄² C_w (C_w clamped: an M-matrix).
+    let a1 = asm.build(&ops.pairs, w, true, -dt, &ops.area);
+    let c = asm.build(&ops.pairs, |_, _| 1.0, false, 1.0, &vec![0.0; n]);
+    // CᵀC = C² (C is symmetric) + λ on the constrained diagonal.
+    let mut a2 = sparse_sparse_matmul(c.as_ref(), c.as_ref(), 1.0, Par::Seq)
+        .map_err(|_| solve_err(SolveError::OutOfMemory))?;
+    if !opts.hard {
+        for &i in constrained {
+            if let Some(v) = a2.rb_mut().get_mut(i, i) {
+                *v += opts.lambda;
+            }
+        }
+    }
+    Ok((a1, a2, c))
+}
+
+/// The surface-diffusion flow of `c` (module docs): precompute, then [`SurfaceDiffusion::run`].
+pub fn surface_diffusion(
+    c: &ControlMesh,
+    opts: &DiffusionOptions,
+) -> Result<ControlMesh, SurfaceError> {
+    SurfaceDiffusion::new(c, opts)?.run()
+}

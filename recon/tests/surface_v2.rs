@@ -1,0 +1,345 @@
+//! FIRESV2 on generated networks: the sphere from three great circles, the sharp cube, a planar network,
+//! tangent continuity across smooth curves, and the curves kept.
+
+mod common;
+mod surface_common;
+
+use common::disc::{circle, line, vertical, B, R, Z};
+use fires_recon::network::{build_network, BuildOptions, StrokeInput};
+
+use fires_recon::geometry::Vec3;
+use fires_recon::mesh::{Face, SurfaceMesh};
+use fires_recon::surface::{
+    base_mesh, reconstruct_v2, reconstruct_v2_from_base, tessellate, v2_refined, ControlMesh,
+    DiffusionOptions, TessellateOptions, V2Options, VertexTag,
+};
+use surface_common::{control, cube, face_normal, face_planarity, CurveSpec};
+
+/// The octahedron network of three orthogonal great circles of radius `r`: 6 vertices, 12 quarter arcs
+/// (sampled 64 times each), 8 triangular faces.
+fn sphere_network(r: f64) -> ControlMesh {
+    let pts = vec![
+        Vec3::new(r, 0.0, 0.0),
+        Vec3::new(-r, 0.0, 0.0),
+        Vec3::new(0.0, r, 0.0),
+        Vec3::new(0.0, -r, 0.0),
+        Vec3::new(0.0, 0.0, r),
+        Vec3::new(0.0, 0.0, -r),
+    ];
+    let faces = vec![
+        vec![0, 2, 4],
+        vec![2, 1, 4],
+        vec![1, 3, 4],
+        vec![3, 0, 4],
+        vec![2, 0, 5],
+        vec![1, 2, 5],
+        vec![3, 1, 5],
+        vec![0, 3, 5],
+    ];
+    let mesh = SurfaceMesh::from_faces(&pts, &faces).unwrap();
+    let specs = mesh
+        .edges()
+        .map(|e| {
+            let (a, b) = mesh.edge_vertices(e);
+            let (pa, pb) = (pts[a.idx()], pts[b.idx()]);
+            CurveSpec {
+                chain: vec![a.idx(), b.idx()],
+                seg: Box::new(move |_, s| {
+                    let th = s * std::f64::consts::FRAC_PI_2;
+                    pa * th.cos() + pb * th.sin()
+                }),
+                samples: 64,
+                sharp: false,
+            }
+        })
+        .collect();
+    control(&pts, &faces, specs)
+}
+
+fn radial_errors(m: &SurfaceMesh, r: f64) -> (f64, f64) {
+    let d: Vec<f64> = m
+        .vertices()
+        .map(|v| (m.position(v).norm() - r) / r)
+        .collect();
+    let rms = (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt();
+    (rms, d.iter().fold(0.0f64, |a, x| a.max(x.abs())))
+}
+
+/// Largest one-sided normal jump across the curve edges selected by `which` (sharp or not): for a curve
+/// edge with faces A | B, the next faces A', B' of the quad strip across it extrapolate each side's normal
+/// to the curve, `n_A + (n_A − n_A')/2` (second-order: a smooth surface gives O(h²), a crease its angle).
+fn normal_jump_deg(c: &ControlMesh, sharp: bool) -> (f64, usize) {
+    let m = &c.mesh;
+    let across = |h: fires_recon::mesh::Halfedge| -> Option<(Face, Face)> {
+        let f = m.face(h)?;
+        let opp = m.next_halfedge(m.next_halfedge(h)).opposite();
+        Some((f, m.face(opp)?))
+    };
+    let (mut worst, mut n) = (0.0f64, 0);
+    for e in m.edges() {
+        if c.span(e).is_none() || c.is_sharp(e) != sharp {
+            continue;
+        }
+        let (Some((a, a2)), Some((b, b2))) = (across(e.halfedge(0)), across(e.halfedge(1))) else {
+            continue;
+        };
+        let ext = |f: Face, g: Face| {
+            let (nf, ng) = (face_normal(m, f), face_normal(m, g));
+            (nf * 1.5 - ng * 0.5).normalize_or_zero()
+        };
+        let (na, nb) = (ext(a, a2), ext(b, b2));
+        worst = worst.max(na.dot(nb).clamp(-1.0, 1.0).acos().to_degrees());
+        n += 1;
+    }
+    (worst, n)
+}
+
+/// Largest distance from the curves' sample points to the mesh's curve edges (the surface along the
+/// curve), and its RMS.
+fn curve_distance(c: &ControlMesh) -> (f64, f64) {
+    let m = &c.mesh;
+    let mut segs: Vec<Vec<(Vec3, Vec3)>> = vec![Vec::new(); c.curves.len()];
+    for e in m.edges() {
+        if let Some(s) = c.span(e) {
+            let (a, b) = m.edge_vertices(e);
+            segs[s.curve].push((m.position(a), m.position(b)));
+        }
+    }
+    let (mut worst, mut sum, mut n) = (0.0f64, 0.0, 0usize);
+    for (ci, cv) in c.curves.iter().enumerate() {
+        for &p in &cv.points {
+            let d = segs[ci]
+                .iter()
+                .map(|&(a, b)| {
+                    let ab = b - a;
+                    let t = ((p - a).dot(ab) / ab.norm_squared().max(1e-300)).clamp(0.0, 1.0);
+                    (a + ab * t - p).norm()
+                })
+                .fold(f64::INFINITY, f64::min);
+            worst = worst.max(d);
+            sum += d * d;
+            n += 1;
+        }
+    }
+    (worst, (sum / n.max(1) as f64).sqrt())
+}
+
+#[test]
+fn a_sphere_from_three_great_circles() {
+    let r = 0.05;
+    let base = sphere_network(r);
+    {
+        let o = V2Options::default();
+        let keep = o.subdivision.keep;
+        let refined = v2_refined(&base, &o).unwrap();
+        let (rms0, max0) = radial_errors(&refined.mesh, r);
+        let c = reconstruct_v2_from_base(&base, &o).unwrap();
+        let (rms, max) = radial_errors(&c.mesh, r);
+        let (jump, nj) = normal_jump_deg(&c, false);
+        let (cd, cd_rms) = curve_distance(&c);
+        eprintln!(
+            "sphere {keep:?}: refined {} v rms {rms0:.2e} max {max0:.2e}; final {} v rms {rms:.2e} max {max:.2e}; normal jump {jump:.3}° over {nj}; curve dist max {:.2e} rms {:.2e} (of R)",
+            refined.mesh.n_vertices(),
+            c.mesh.n_vertices(),
+            cd / r,
+            cd_rms / r
+        );
+        assert!(rms <= 0.005 && max <= 0.02, "{keep:?}: rms {rms} max {max}");
+        assert!(jump <= 1.0, "{keep:?}: {jump}°");
+        assert!(cd <= 1e-3 * r, "{keep:?}: {cd}");
+    }
+}
+
+#[test]
+fn a_cube_with_sharp_edges() {
+    let base = cube(true);
+    let c = reconstruct_v2_from_base(&base, &V2Options::default()).unwrap();
+    let edge = 2.0;
+    let mut worst = 0.0f64;
+    for f in c.mesh.faces() {
+        worst = worst.max(face_planarity(&c.mesh, f));
+    }
+    // Every vertex on its cube face plane (the 6 faces are planar), and creases at 90°.
+    let mut off_cube = 0.0f64;
+    for v in c.mesh.vertices() {
+        let p = c.mesh.position(v);
+        off_cube = off_cube.max((p.x.abs().max(p.y.abs()).max(p.z.abs()) - 1.0).abs());
+    }
+    let (jump, n) = normal_jump_deg(&c, true);
+    eprintln!("cube: {} v, face planarity {worst:.2e}, off the cube {off_cube:.2e}, crease angle {jump:.3}° over {n}", c.mesh.n_vertices());
+    assert!(off_cube <= 0.005 * edge);
+    assert!(n > 0 && (80.0..=100.0).contains(&jump), "{jump}");
+}
+
+#[test]
+fn a_planar_network_gives_a_planar_surface() {
+    // A 3×2 grid of curved-sided faces in the plane z = 0.3x − 0.2y + 1 (a tilted plane).
+    let plane = |x: f64, y: f64| Vec3::new(x, y, 0.3 * x - 0.2 * y + 1.0);
+    let mut pts = Vec::new();
+    for j in 0..3 {
+        for i in 0..4 {
+            pts.push(plane(i as f64, j as f64 + 0.2 * (i as f64).sin()));
+        }
+    }
+    let id = |i: usize, j: usize| j * 4 + i;
+    let mut faces = Vec::new();
+    for j in 0..2 {
+        for i in 0..3 {
+            faces.push(vec![id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    let mesh = SurfaceMesh::from_faces(&pts, &faces).unwrap();
+    let specs = mesh
+        .edges()
+        .map(|e| {
+            let (a, b) = mesh.edge_vertices(e);
+            let (pa, pb) = (pts[a.idx()], pts[b.idx()]);
+            CurveSpec {
+                chain: vec![a.idx(), b.idx()],
+                // A wiggle inside the plane.
+                seg: Box::new(move |_, s| {
+                    let q = pa * (1.0 - s) + pb * s;
+                    let w = 0.1 * (std::f64::consts::PI * s).sin();
+                    plane(q.x + w, q.y - w)
+                }),
+                samples: 16,
+                sharp: false,
+            }
+        })
+        .collect();
+    let base = control(&pts, &faces, specs);
+    let c = reconstruct_v2_from_base(&base, &V2Options::default()).unwrap();
+    let n = Vec3::new(-0.3, 0.2, 1.0).normalize_or_zero();
+    let off = c
+        .mesh
+        .vertices()
+        .map(|v| (c.mesh.position(v) - plane(0.0, 0.0)).dot(n).abs())
+        .fold(0.0f64, f64::max);
+    eprintln!("planar: {} v, off the plane {off:.2e}", c.mesh.n_vertices());
+    assert!(off <= 1e-9 * 3.0, "{off}");
+}
+
+#[test]
+fn tessellation_makes_sixteen_n_quads_with_curve_vertices_on_the_curves() {
+    let base = sphere_network(1.0);
+    let t = tessellate(&base, &TessellateOptions::default()).unwrap();
+    assert_eq!(t.mesh.n_faces(), 8 * 16 * 3);
+    assert!(t.mesh.faces().all(|f| t.mesh.face_valence(f) == 4));
+    let mut on = 0;
+    for v in t.mesh.vertices() {
+        if let VertexTag::OnCurve(q) = t.tag(v) {
+            on += 1;
+            assert!((t.mesh.position(v) - t.curves[q.curve].point_at(q.t)).norm() < 1e-12);
+            // Arc fractions k/8 of a quarter circle.
+            let k = q.t / t.curves[q.curve].length() * 8.0;
+            assert!((k - k.round()).abs() < 1e-9, "{k}");
+        }
+    }
+    assert_eq!(on, 12 * 7);
+}
+
+#[test]
+fn hard_constraints_keep_every_curve_vertex_exactly() {
+    let base = sphere_network(1.0);
+    let o = V2Options {
+        diffusion: DiffusionOptions {
+            hard: true,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let t = tessellate(&base, &o.tessellate).unwrap();
+    let f = v2_refined(&base, &o).unwrap();
+    for v in t.mesh.vertices() {
+        if t.tag(v) != VertexTag::Free {
+            assert!((t.mesh.position(v) - f.mesh.position(v)).norm() < 1e-14);
+        }
+    }
+    let (rms, max) = radial_errors(&f.mesh, 1.0);
+    eprintln!("hard: refined rms {rms:.2e} max {max:.2e}");
+    assert!(rms < 0.01);
+}
+
+/// The disc network of the network tests (boundary ellipse, three vertical and three horizontal chords),
+/// every point lifted by `lift(x, y)`.
+fn disc_network(lift: impl Fn(f64, f64) -> f64) -> fires_recon::network::Network {
+    let horizontal = |y: f64| {
+        let x = R * (1.0 - (y / B).powi(2)).sqrt();
+        line([-x, y, Z], [x, y, Z], 0.002)
+    };
+    let mut strokes = vec![circle(600)];
+    for c in [-0.05, 0.0, 0.05] {
+        strokes.push(vertical(c));
+        strokes.push(horizontal(c * 0.9));
+    }
+    let inputs: Vec<StrokeInput> = strokes
+        .into_iter()
+        .enumerate()
+        .map(|(k, pts)| StrokeInput {
+            id: k as u32,
+            points: pts
+                .into_iter()
+                .map(|p| [p[0], p[1], p[2] + lift(p[0], p[1])])
+                .collect(),
+            closed: k == 0,
+            sigma_mm: None,
+            mode: 0,
+        })
+        .collect();
+    let (net, report) = build_network(&inputs, &BuildOptions::default());
+    assert!(report.rejected.is_empty(), "{:?}", report.rejected);
+    net
+}
+
+#[test]
+fn a_planar_network_from_strokes_gives_a_planar_surface() {
+    let net = disc_network(|_, _| 0.0);
+    let base = base_mesh(&net).unwrap();
+    let c = reconstruct_v2(&net, &V2Options::default()).unwrap();
+    let off = c
+        .mesh
+        .vertices()
+        .map(|v| (c.mesh.position(v).z - Z).abs())
+        .fold(0.0f64, f64::max);
+    eprintln!(
+        "planar disc: {} faces, {} v, off the plane {off:.2e} m (size 0.2 m)",
+        base.mesh.n_faces(),
+        c.mesh.n_vertices()
+    );
+    assert!(off <= 1e-9 * 2.0 * R, "{off}");
+}
+
+#[test]
+fn a_curved_network_from_strokes_is_smooth_across_its_curves_and_keeps_them() {
+    // A paraboloid cap: z = Z + k(x² + y²), sag 20 mm over the 0.2 m disc.
+    let k = 2.0;
+    let lift = move |x: f64, y: f64| k * (x * x + y * y);
+    let net = disc_network(lift);
+    let c = reconstruct_v2(&net, &V2Options::default()).unwrap();
+    let err: Vec<f64> = c
+        .mesh
+        .vertices()
+        .map(|v| {
+            let p = c.mesh.position(v);
+            p.z - Z - lift(p.x, p.y)
+        })
+        .collect();
+    let rms = (err.iter().map(|e| e * e).sum::<f64>() / err.len() as f64).sqrt();
+    let max = err.iter().fold(0.0f64, |a, e| a.max(e.abs()));
+    let (jump, nj) = normal_jump_deg(&c, false);
+    let (cd, cd_rms) = curve_distance(&c);
+    let diag = (4.0 * R * R + 4.0 * B * B + (k * R * R).powi(2)).sqrt();
+    eprintln!(
+        "paraboloid: {} v, height error rms {:.3} mm max {:.3} mm ({:.3}% of the {:.0} mm diagonal); normal jump {jump:.3}° over {nj}; curve dist max {:.2e} mm rms {:.2e} mm",
+        c.mesh.n_vertices(),
+        rms * 1e3,
+        max * 1e3,
+        100.0 * rms / diag,
+        diag * 1e3,
+        cd * 1e3,
+        cd_rms * 1e3
+    );
+    assert!(jump <= 1.0, "{jump}");
+    assert!(cd <= 1e-5, "{cd}");
+    assert!(rms <= 0.003 * diag, "{rms}");
+}
