@@ -7,7 +7,8 @@
 //!
 //! The timing is single-threaded (FIRESV1 runs on one thread) and reports the median of repeated runs:
 //! `v1_ms` for the default V1 to the first subdivision level (about 3,000 vertices for 50 faces), and
-//! `levels` for each further Catmull-Clark level.
+//! `levels` for the subdivision of the refined mesh to K = 2, 3, 4 levels (NULISSmod, then Catmull-Clark with
+//! the limit fit; one run each).
 
 use std::f64::consts::TAU;
 use std::time::Instant;
@@ -141,20 +142,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "refine": median_ms(|| { let _ = refine(&tq, &opts.refine); }, 21),
         "nuliss_mod": median_ms(|| { let _ = nuliss_mod(&refined, &opts.nuliss); }, 21),
     });
-    // Further Catmull-Clark levels from the V1 result.
+    // Further Catmull-Clark levels: the whole subdivision from the refined mesh to K = 2, 3, 4 levels.
     let mut levels = Vec::new();
-    let mut cur = surface.clone();
-    for _ in 0..3 {
-        let cc = V1Options {
-            levels: 1,
-            nuliss_levels: 0,
-            ..opts
-        };
+    for k in 2..=4 {
+        let o = V1Options { levels: k, ..opts };
         let s = Instant::now();
-        cur = subdivide_v1(&cur, &cc)?;
-        levels.push(
-            json!({"vertices": cur.mesh.n_vertices(), "ms": s.elapsed().as_secs_f64() * 1e3}),
-        );
+        let out = subdivide_v1(&refined, &o)?;
+        levels.push(json!({"levels": k, "vertices": out.mesh.n_vertices(), "ms": s.elapsed().as_secs_f64() * 1e3}));
     }
     println!(
         "{}",

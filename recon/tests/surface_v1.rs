@@ -667,7 +667,7 @@ fn v1_reconstructs_known_surfaces_within_half_a_percent_of_the_diagonal() {
 
 // ----- basic refinement, networks from the sketching tools ------------------------------------------
 
-use fires_recon::surface::{refine, RefineOptions};
+use fires_recon::surface::{refine, CurveKeeping, RefineOptions};
 
 #[test]
 fn basic_refinement_gives_quads_with_every_vertex_on_a_polyline() {
@@ -755,7 +755,10 @@ fn a_disc_sketched_with_the_tools_reconstructs_flat() {
         sides.iter().any(|&n| n >= 5),
         "the sketch has faces to triquadrify: {sides:?}"
     );
-    let s = reconstruct_v1(&net, &V1Options::default()).unwrap();
+    // Snapping keeps the curve vertices exactly on the curves (checked below).
+    let mut opts = V1Options::default();
+    opts.catmull_clark.keep = CurveKeeping::Snap;
+    let s = reconstruct_v1(&net, &opts).unwrap();
     assert!(s.mesh.faces().all(|f| s.mesh.face_valence(f) == 4));
     let worst = s
         .mesh
@@ -816,4 +819,74 @@ fn a_sharp_cube_network_stays_on_the_cube_faces() {
     );
     let s = nuliss_mod(&refined_v1(&cube_network(0.0), &opts).unwrap(), &plain).unwrap();
     assert!(worst_off(&s) > 1e-4, "smooth rules: {}", worst_off(&s));
+}
+
+/// The largest angle between the normals of two faces sharing an edge, across edges on drawn curves and
+/// across all others.
+fn dihedrals(s: &ControlMesh) -> (f64, f64) {
+    let m = &s.mesh;
+    let normal = |f| {
+        let p: Vec<Vec3> = m.face_vertices(f).map(|x| m.position(x)).collect();
+        (p[2] - p[0]).cross(p[3] - p[1]).normalize_or_zero()
+    };
+    let (mut on, mut off) = (0.0f64, 0.0f64);
+    for e in m.edges() {
+        let h = e.halfedge(0);
+        let (Some(f0), Some(f1)) = (m.face(h), m.face(h.opposite())) else {
+            continue;
+        };
+        let a = normal(f0)
+            .dot(normal(f1))
+            .clamp(-1.0, 1.0)
+            .acos()
+            .to_degrees();
+        if s.span(e).is_some_and(|sp| !s.curves[sp.curve].generated) {
+            on = on.max(a);
+        } else {
+            off = off.max(a);
+        }
+    }
+    (on, off)
+}
+
+#[test]
+fn v1_is_smooth_across_the_drawn_curves_and_stays_near_them() {
+    let (rr, r) = (0.1, 0.04);
+    let torus = move |s: f64, t: f64| {
+        let (a, b) = (TAU * s, TAU * t);
+        let rho = rr + r * b.cos();
+        [rho * a.cos(), rho * a.sin(), r * b.sin()]
+    };
+    let net = parametric_network(&torus, 8, 6, (true, true), 16);
+    let opts = V1Options {
+        levels: 3,
+        ..V1Options::default()
+    };
+    // Default (limit fit): the surface bends across the curves no more than between faces elsewhere.
+    let s = reconstruct_v1(&net, &opts).unwrap();
+    let (on, off) = dihedrals(&s);
+    eprintln!("limit fit: max dihedral across drawn curves {on:.2}°, elsewhere {off:.2}°");
+    assert!(
+        on <= 1.5 * off,
+        "a kink along the curves: {on}° against {off}°"
+    );
+    let mut dev: f64 = 0.0;
+    for x in s.mesh.vertices() {
+        if let VertexTag::OnCurve(p) = s.tag(x) {
+            if !s.curves[p.curve].generated {
+                dev = dev.max((s.mesh.position(x) - s.curves[p.curve].point_at(p.t)).norm());
+            }
+        }
+    }
+    eprintln!(
+        "limit fit: curve vertices within {:.4} mm of their curves",
+        dev * 1e3
+    );
+    assert!(dev <= 1e-4, "curve vertices {dev} m off their curves");
+    // Snapping keeps the Coons patches' kink along the curves.
+    let mut snap = opts;
+    snap.catmull_clark.keep = CurveKeeping::Snap;
+    let (on_s, off_s) = dihedrals(&reconstruct_v1(&net, &snap).unwrap());
+    eprintln!("snap: max dihedral across drawn curves {on_s:.2}°, elsewhere {off_s:.2}°");
+    assert!(on_s > 2.0 * off_s);
 }
