@@ -890,3 +890,59 @@ fn v1_is_smooth_across_the_drawn_curves_and_stays_near_them() {
     eprintln!("snap: max dihedral across drawn curves {on_s:.2}°, elsewhere {off_s:.2}°");
     assert!(on_s > 2.0 * off_s);
 }
+
+#[test]
+fn a_one_sided_loop_face_becomes_a_triangle_split_in_thirds() {
+    let ring: Vec<[f64; 3]> = (0..=60)
+        .map(|i| {
+            let a = TAU * i as f64 / 60.0;
+            [0.05 * a.cos(), 0.05 * a.sin(), 0.3]
+        })
+        .collect();
+    let first = ring[0];
+    let net = network_from_polygons(&[first], &[vec![0]], move |_, _| ring.clone(), |_, _| 0.0);
+    let cm = base_mesh(&net).unwrap();
+    assert_eq!((cm.mesh.n_vertices(), cm.mesh.n_faces()), (3, 1));
+    let len = cm.curves[0].length();
+    let mut ts: Vec<f64> = cm
+        .vertex_tag
+        .iter()
+        .filter_map(|t| match t {
+            VertexTag::OnCurve(p) => Some(p.t / len),
+            _ => None,
+        })
+        .collect();
+    ts.sort_by(f64::total_cmp);
+    assert!((ts[0] - 1.0 / 3.0).abs() < 1e-15 && (ts[1] - 2.0 / 3.0).abs() < 1e-15);
+    assert_spans_on_curves(&cm, 1e-15);
+    let s = reconstruct_v1(&net, &V1Options::default()).unwrap();
+    let worst = s
+        .mesh
+        .vertices()
+        .map(|x| (s.mesh.position(x).z - 0.3).abs())
+        .fold(0.0, f64::max);
+    assert!(worst <= 1e-9 * 0.1, "off-plane {worst}");
+}
+
+#[test]
+fn a_face_through_a_vertex_twice_is_refused_with_its_name() {
+    // A bow tie: one loop through vertex 0 twice.
+    let p = [
+        [0.0, 0.0, 0.0],
+        [0.1, 0.05, 0.0],
+        [0.1, -0.05, 0.0],
+        [-0.1, 0.05, 0.0],
+        [-0.1, -0.05, 0.0],
+    ];
+    let net = network_from_polygons(
+        &p,
+        &[vec![0, 1, 2, 0, 4, 3]],
+        move |a, b| straight(p[a], p[b], 4),
+        |_, _| 0.0,
+    );
+    let e = base_mesh(&net).unwrap_err();
+    assert!(
+        matches!(&e, SurfaceError::UnsupportedFace { face, reason } if face == "f0" && reason.contains("twice")),
+        "{e}"
+    );
+}
