@@ -30,7 +30,8 @@
 //! * [`CurveKeeping::Limit`] (FIRESV2's choice; Schaefer, Warren & Zorin, *Lofting curve networks using subdivision surfaces*,
 //!   SGP 2004, §4, in spirit: move the control points so that the limit surface passes through the curves):
 //!   before the step, the curve vertices are moved (Gauss-Seidel on the limit stencils) so that their
-//!   Catmull-Clark limit positions are their curve points, then the plain rules apply; finish with
+//!   Catmull-Clark limit positions are their curve points (on the C1 cubic through the polyline's samples,
+//!   [`smooth_point_at`]), then the plain rules apply; finish with
 //!   [`limit_positions`]. The surface stays C1 across non-sharp curves and passes through the curve vertices
 //!   of every level (same sphere: 0.09°).
 //! * [`CurveKeeping::None`]: the plain rules.
@@ -165,6 +166,48 @@ pub fn curve_target(c: &ControlMesh, v: Vertex) -> Option<Vec3> {
     }
 }
 
+/// [`curve_target`] on the C1 cubic (Catmull-Rom with arc-length parameters) through the curve's samples
+/// instead of the polyline: the target the limit fit uses, so that a surface finer than the polyline's
+/// sampling does not inherit the polyline's kinks at its samples (it still passes through every sample).
+pub fn smooth_curve_target(c: &ControlMesh, v: Vertex) -> Option<Vec3> {
+    match c.tag(v) {
+        VertexTag::OnCurve(p) => c.curves.get(p.curve).map(|cv| smooth_point_at(cv, p.t)),
+        _ => curve_target(c, v),
+    }
+}
+
+/// The point at arc length `t` of the Catmull-Rom cubic through `curve`'s samples (tangents by central
+/// differences in arc length, one-sided at the ends).
+pub fn smooth_point_at(curve: &super::control::Curve, t: f64) -> Vec3 {
+    let (p, a) = (&curve.points, &curve.arc);
+    let n = p.len();
+    if n < 3 || a.len() != n || t <= 0.0 || t >= curve.length() {
+        return curve.point_at(t);
+    }
+    let j = a.partition_point(|&x| x <= t).clamp(1, n - 1);
+    let (a0, a1) = (a[j - 1], a[j]);
+    let h = a1 - a0;
+    if h <= 0.0 {
+        return curve.point_at(t);
+    }
+    let tangent = |k: usize| {
+        let (lo, hi) = (k.saturating_sub(1), (k + 1).min(n - 1));
+        let d = a[hi] - a[lo];
+        if d > 0.0 {
+            (p[hi] - p[lo]) / d
+        } else {
+            Vec3::ZERO
+        }
+    };
+    let (m0, m1) = (tangent(j - 1) * h, tangent(j) * h);
+    let s = (t - a0) / h;
+    let (s2, s3) = (s * s, s * s * s);
+    p[j - 1] * (2.0 * s3 - 3.0 * s2 + 1.0)
+        + m0 * (s3 - 2.0 * s2 + s)
+        + p[j] * (-2.0 * s3 + 3.0 * s2)
+        + m1 * (s3 - s2)
+}
+
 /// The Catmull-Clark limit position of every vertex of an all-quad mesh, with the crease rules of the
 /// module docs: smooth `(n²v + 4Σeⱼ + Σfⱼ)/(n(n + 5))` (Halstead, Kass & DeRose, *Efficient, fair
 /// interpolation using Catmull-Clark surfaces*, SIGGRAPH 1993, appendix A: eⱼ the edge neighbours, fⱼ the
@@ -225,7 +268,7 @@ fn fit_limit(c: &ControlMesh, cls: &Classes, sweeps: usize) -> Vec<Vec3> {
     let targets: Vec<(Vertex, Vec3)> = m
         .vertices()
         .filter(|&v| cls.rule[v.idx()] != Rule::Fixed)
-        .filter_map(|v| curve_target(c, v).map(|t| (v, t)))
+        .filter_map(|v| smooth_curve_target(c, v).map(|t| (v, t)))
         .collect();
     gauss_seidel(m, cls, m.positions().to_vec(), &targets, sweeps)
 }
@@ -263,7 +306,7 @@ pub fn interpolating_control(
     let targets: Vec<(Vertex, Vec3)> = m
         .vertices()
         .filter(|&v| cls.rule[v.idx()] != Rule::Fixed)
-        .map(|v| (v, curve_target(c, v).unwrap_or(m.position(v))))
+        .map(|v| (v, smooth_curve_target(c, v).unwrap_or(m.position(v))))
         .collect();
     let p = gauss_seidel(m, &cls, m.positions().to_vec(), &targets, sweeps);
     let mut out = c.clone();

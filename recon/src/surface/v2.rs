@@ -22,7 +22,10 @@ use crate::network::Network;
 pub struct V2Options {
     /// The basic refinement (default 3 levels: 16n quads per n-gon).
     pub tessellate: TessellateOptions,
-    /// The surface-diffusion flow (the thesis's defaults).
+    /// The surface-diffusion flow: the thesis's defaults (λ = 1, σ = 0.2, τ = 0.5, 5 × 5 steps) but with hard
+    /// curve constraints, the digest's recommendation for a surface that interpolates the network (soft
+    /// λ = 1 lets the curve vertices drift: on a bumpy 5 × 5 grid it doubles the Hausdorff error and, with
+    /// 10 outer iterations, gives 10° kinks across the curves).
     pub diffusion: DiffusionOptions,
     /// The final subdivision's rules and curve keeping (default [`CurveKeeping::Limit`]: tangent-continuous
     /// across the smooth curves, and through them after the final limit projection).
@@ -43,7 +46,10 @@ impl Default for V2Options {
     fn default() -> Self {
         Self {
             tessellate: TessellateOptions::default(),
-            diffusion: DiffusionOptions::default(),
+            diffusion: DiffusionOptions {
+                hard: true,
+                ..DiffusionOptions::default()
+            },
             subdivision: CatmullClarkOptions {
                 keep: CurveKeeping::Limit,
                 ..CatmullClarkOptions::default()
