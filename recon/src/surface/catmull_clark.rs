@@ -166,7 +166,7 @@ pub fn curve_target(c: &ControlMesh, v: Vertex) -> Option<Vec3> {
     }
 }
 
-/// [`curve_target`] on the C1 cubic (Catmull-Rom with arc-length parameters) through the curve's samples
+/// [`curve_target`] on the C1 cubic (Hermite, arc-length parameters) through the curve's samples
 /// instead of the polyline: the target the limit fit uses, so that a surface finer than the polyline's
 /// sampling does not inherit the polyline's kinks at its samples (it still passes through every sample).
 pub fn smooth_curve_target(c: &ControlMesh, v: Vertex) -> Option<Vec3> {
@@ -176,8 +176,8 @@ pub fn smooth_curve_target(c: &ControlMesh, v: Vertex) -> Option<Vec3> {
     }
 }
 
-/// The point at arc length `t` of the Catmull-Rom cubic through `curve`'s samples (tangents by central
-/// differences in arc length, one-sided at the ends).
+/// The point at arc length `t` of the cubic Hermite interpolant of `curve`'s samples in arc length, with
+/// three-point parabolic tangents (C1, third-order accurate between samples).
 pub fn smooth_point_at(curve: &super::control::Curve, t: f64) -> Vec3 {
     let (p, a) = (&curve.points, &curve.arc);
     let n = p.len();
@@ -190,13 +190,22 @@ pub fn smooth_point_at(curve: &super::control::Curve, t: f64) -> Vec3 {
     if h <= 0.0 {
         return curve.point_at(t);
     }
+    // Derivative of the parabola through three consecutive samples (second-order accurate for any
+    // spacing), at the middle sample inside the curve and at the end sample at its ends.
     let tangent = |k: usize| {
-        let (lo, hi) = (k.saturating_sub(1), (k + 1).min(n - 1));
-        let d = a[hi] - a[lo];
-        if d > 0.0 {
-            (p[hi] - p[lo]) / d
+        let i = k.clamp(1, n - 2);
+        let (h0, h1) = (a[i] - a[i - 1], a[i + 1] - a[i]);
+        if h0 <= 0.0 || h1 <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let (q0, q1, q2) = (p[i - 1], p[i], p[i + 1]);
+        let s = h0 + h1;
+        if k == 0 {
+            q0 * (-(2.0 * h0 + h1) / (h0 * s)) + q1 * (s / (h0 * h1)) - q2 * (h0 / (h1 * s))
+        } else if k == n - 1 {
+            q0 * (h1 / (h0 * s)) - q1 * (s / (h0 * h1)) + q2 * ((2.0 * h1 + h0) / (h1 * s))
         } else {
-            Vec3::ZERO
+            q0 * (-h1 / (h0 * s)) + q1 * ((h1 - h0) / (h0 * h1)) + q2 * (h0 / (h1 * s))
         }
     };
     let (m0, m1) = (tangent(j - 1) * h, tangent(j) * h);
