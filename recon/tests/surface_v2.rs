@@ -554,3 +554,28 @@ fn the_scalar_flow_keeps_a_sphere_better_than_the_vector_flow() {
         assert!(*rms < 3.5e-3 && *max < 1.5e-2, "{rms} {max}");
     }
 }
+
+#[test]
+fn bad_inputs_are_errors_not_panics() {
+    assert!(reconstruct_v2(&Network::new(), &V2Options::default()).is_err());
+    // A control mesh without curve vertices has nothing to hold the flow.
+    let mut free = sphere_network(1.0);
+    for t in &mut free.vertex_tag {
+        *t = VertexTag::Free;
+    }
+    for s in &mut free.edge_curve {
+        *s = None;
+    }
+    assert!(reconstruct_v2_from_base(&free, &V2Options::default()).is_err());
+    // A tag naming a curve that does not exist.
+    let mut bad = sphere_network(1.0);
+    bad.edge_curve[0] = bad.edge_curve[0].map(|mut s| {
+        s.curve = 99;
+        s
+    });
+    assert!(reconstruct_v2_from_base(&bad, &V2Options::default()).is_err());
+    // Non-finite positions.
+    let mut nan = sphere_network(1.0);
+    nan.mesh.positions_mut()[0].x = f64::NAN;
+    assert!(reconstruct_v2_from_base(&nan, &V2Options::default()).is_err());
+}

@@ -32,7 +32,7 @@ pub struct V2Options {
     pub subdivision: CatmullClarkOptions,
     /// Catmull-Clark levels after the flow; `None` chooses them from [`Self::max_vertices`].
     pub levels: Option<usize>,
-    /// Vertex budget of the automatic level choice (default 40 000).
+    /// Vertex budget of the automatic level choice (default 60 000).
     pub max_vertices: usize,
     /// Most levels the automatic choice takes (default 3).
     pub max_levels: usize,
@@ -55,7 +55,7 @@ impl Default for V2Options {
                 ..CatmullClarkOptions::default()
             },
             levels: None,
-            max_vertices: 40_000,
+            max_vertices: 60_000,
             max_levels: 3,
             interpolate_sweeps: 24,
         }
