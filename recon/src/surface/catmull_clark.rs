@@ -24,7 +24,7 @@
 //!   put at its curve point (its parameter's point on the polyline) and every curve edge's edge point at its
 //!   span's mid-parameter point. All other points use the rules above (the vertices next to a non-sharp
 //!   curve average both sides), but undoing the Catmull-Clark shrinkage on the curve only leaves a ridge
-//!   along it: measured on the sphere of three great circles, the
+//!   along it: measured on the sphere of three great circles (FIRESV2, soft flow), the
 //!   normals across the curves differ by 25° after three levels, so this mode suits sharp curves, or levels
 //!   followed by ones of another kind;
 //! * [`CurveKeeping::Limit`] (FIRESV2's choice; Schaefer, Warren & Zorin, *Lofting curve networks using subdivision surfaces*,
@@ -33,7 +33,7 @@
 //!   Catmull-Clark limit positions are their curve points (on the C1 cubic through the polyline's samples,
 //!   [`smooth_point_at`]), then the plain rules apply; finish with
 //!   [`limit_positions`]. The surface stays C1 across non-sharp curves and passes through the curve vertices
-//!   of every level (same sphere: 0.09°).
+//!   of every level (same sphere: 0.04°; a bumpy height-field grid 0.5°).
 //! * [`CurveKeeping::None`]: the plain rules.
 
 use super::control::{ControlMesh, CurvePoint, CurveSpan, VertexTag};
