@@ -14,7 +14,9 @@ use std::time::Instant;
 
 use fires_recon::io::{write_mesh_file, PolygonSoup};
 use fires_recon::network::{Network, NetworkFile, PolylineAttrs};
-use fires_recon::surface::{reconstruct_v1, refined_v1, subdivide_v1, V1Options};
+use fires_recon::surface::{
+    base_mesh, nuliss_mod, reconstruct_v1, refine, refined_v1, subdivide_v1, triquadrify, V1Options,
+};
 use serde_json::{json, Value};
 
 /// A torus network: `ns × nt` quads, every edge's polyline `samples` segments sampled on the torus.
@@ -130,6 +132,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
         21,
     );
+    // Stage by stage.
+    let base = base_mesh(&net)?;
+    let tq = triquadrify(&base, &opts.triquad)?;
+    let stages = json!({
+        "base_mesh": median_ms(|| { let _ = base_mesh(&net); }, 21),
+        "triquadrify": median_ms(|| { let _ = triquadrify(&base, &opts.triquad); }, 21),
+        "refine": median_ms(|| { let _ = refine(&tq, &opts.refine); }, 21),
+        "nuliss_mod": median_ms(|| { let _ = nuliss_mod(&refined, &opts.nuliss); }, 21),
+    });
     // Further Catmull-Clark levels from the V1 result.
     let mut levels = Vec::new();
     let mut cur = surface.clone();
@@ -156,6 +167,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "faces": surface.mesh.n_faces(),
             "v1_ms": v1_ms,
             "threads": 1,
+            "stages_ms": stages,
             "levels": levels,
         })
     );

@@ -599,6 +599,56 @@ fn v1_reconstructs_known_surfaces_within_half_a_percent_of_the_diagonal() {
         hausdorff(&s, &d, &truth),
         diag(&truth),
     ));
+    // 4. The torus again with pairs of quads merged into hexagons (triquadrification on a curved surface):
+    // the hexagons' cuts come from Q''s Coons patch, not from the torus.
+    let (ns, nt) = (8, 6);
+    let at = |i: usize, j: usize| (i % ns) + ns * (j % nt);
+    let mut faces = Vec::new();
+    for j in 0..nt {
+        for i in (0..ns).step_by(2) {
+            faces.push(vec![
+                at(i, j),
+                at(i + 1, j),
+                at(i + 2, j),
+                at(i + 2, j + 1),
+                at(i + 1, j + 1),
+                at(i, j + 1),
+            ]);
+        }
+    }
+    let pts: Vec<[f64; 3]> = (0..ns * nt)
+        .map(|k| torus((k % ns) as f64 / ns as f64, (k / ns) as f64 / nt as f64))
+        .collect();
+    let uv = |k: usize| ((k % ns) as f64 / ns as f64, (k / ns) as f64 / nt as f64);
+    let net = network_from_polygons(
+        &pts,
+        &faces,
+        |a, b| {
+            let (pa, mut pb) = (uv(a), uv(b));
+            if (pb.0 - pa.0).abs() > 0.5 {
+                pb.0 += if pb.0 < pa.0 { 1.0 } else { -1.0 };
+            }
+            if (pb.1 - pa.1).abs() > 0.5 {
+                pb.1 += if pb.1 < pa.1 { 1.0 } else { -1.0 };
+            }
+            (0..=16)
+                .map(|k| {
+                    let w = k as f64 / 16.0;
+                    torus(pa.0 + w * (pb.0 - pa.0), pa.1 + w * (pb.1 - pa.1))
+                })
+                .collect()
+        },
+        |_, _| 0.0,
+    );
+    let s = reconstruct_v1(&net, &opts).unwrap();
+    let truth = grid_samples(&torus, 120);
+    let d = |p: Vec3| (((p.x * p.x + p.y * p.y).sqrt() - rr).hypot(p.z) - r).abs();
+    report.push((
+        "torus of hexagons",
+        s.mesh.n_vertices(),
+        hausdorff(&s, &d, &truth),
+        diag(&truth),
+    ));
     for (name, nv, (fwd, back), dg) in &report {
         let hd = fwd.max(*back);
         eprintln!(
@@ -678,6 +728,33 @@ fn a_disc_sketched_with_the_tools_reconstructs_flat() {
         )
         .unwrap();
     }
+    for (a0, a1) in [(160.0f64, -20.0f64), (100.0, 250.0)] {
+        let c = common::disc::chord(a0.to_radians(), a1.to_radians(), 0.0);
+        insert_curve(&mut net, CurveInput::new(&c), &InsertOptions::default()).unwrap();
+    }
+    // A stroke from the top arc that stops on the first chord (overshooting it by 3 mm, trimmed): a
+    // T-junction, so the faces beside it get five and more sides.
+    let x = 0.025;
+    let top = common::disc::B / common::disc::R * (common::disc::R.powi(2) - x * x).sqrt();
+    let t = (x + 0.1 * 160f64.to_radians().cos().abs()) / (2.0 * 0.1 * 20f64.to_radians().cos());
+    let y_chord = 0.097 * 20f64.to_radians().sin() * (1.0 - 2.0 * t);
+    let stroke = common::disc::line([x, top, Z], [x, y_chord - 0.003, Z], 0.002);
+    insert_curve(
+        &mut net,
+        CurveInput::new(&stroke),
+        &InsertOptions::default(),
+    )
+    .unwrap();
+    let base = base_mesh(&net).unwrap();
+    let sides: Vec<usize> = base
+        .mesh
+        .faces()
+        .map(|f| base.mesh.face_valence(f))
+        .collect();
+    assert!(
+        sides.iter().any(|&n| n >= 5),
+        "the sketch has faces to triquadrify: {sides:?}"
+    );
     let s = reconstruct_v1(&net, &V1Options::default()).unwrap();
     assert!(s.mesh.faces().all(|f| s.mesh.face_valence(f) == 4));
     let worst = s

@@ -80,8 +80,7 @@ pub fn nuliss_mod(cm: &ControlMesh, opts: &NulissOptions) -> Result<ControlMesh,
             m.face_valence(f)
         )));
     }
-    let mut b = Builder::from_control(cm);
-    b.spans.clear();
+    let mut b = Builder::from_control_without_spans(cm);
     // Edge points: vertex index and, on curves, the curve parameter.
     let mut ep: Vec<usize> = vec![usize::MAX; m.edges_size()];
     let mut ep_t: Vec<f64> = vec![f64::NAN; m.edges_size()];
