@@ -27,7 +27,7 @@ mod v2;
 
 pub use catmull_clark::{
     catmull_clark, catmull_clark_n, curve_target, interpolating_control, limit_positions,
-    CatmullClarkOptions, CurveKeeping,
+    smooth_curve_target, smooth_point_at, CatmullClarkOptions, CurveKeeping,
 };
 pub use control::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};
 pub use coons::{chord_params, span_points, CoonsPatch, Side};
