@@ -442,182 +442,10 @@ fn checked_index(cm: &ControlMesh, e: fires_recon::mesh::Edge) -> usize {
     e.idx()
 }
 
-// ----- the thesis's validation (§7.2): known surface, curves along a coarse quad mesh, V1 -----------
-
-use common::netgen::MeshDistance;
-use std::f64::consts::{PI, TAU};
-
-/// Two-sided Hausdorff distance between the reconstruction and a known surface: `dist` gives a point's
-/// distance to the known surface, `truth` samples it densely.
-fn hausdorff(s: &ControlMesh, dist: &dyn Fn(Vec3) -> f64, truth: &[Vec3]) -> (f64, f64) {
-    let m = &s.mesh;
-    let mut fwd: f64 = 0.0;
-    for x in m.vertices() {
-        fwd = fwd.max(dist(m.position(x)));
-    }
-    for f in m.faces() {
-        let c = m
-            .face_vertices(f)
-            .map(|x| m.position(x))
-            .fold(Vec3::ZERO, |a, p| a + p)
-            / m.face_valence(f) as f64;
-        fwd = fwd.max(dist(c));
-    }
-    let q = MeshDistance::new(m);
-    let back = truth.iter().map(|&p| q.distance(p)).fold(0.0, f64::max);
-    (fwd, back)
-}
-
-fn diag(pts: &[Vec3]) -> f64 {
-    let lo = pts
-        .iter()
-        .fold(Vec3::new(f64::MAX, f64::MAX, f64::MAX), |a, p| {
-            Vec3::new(a.x.min(p.x), a.y.min(p.y), a.z.min(p.z))
-        });
-    let hi = pts
-        .iter()
-        .fold(Vec3::new(f64::MIN, f64::MIN, f64::MIN), |a, p| {
-            Vec3::new(a.x.max(p.x), a.y.max(p.y), a.z.max(p.z))
-        });
-    (hi - lo).norm()
-}
-
-fn grid_samples(f: &dyn Fn(f64, f64) -> [f64; 3], n: usize) -> Vec<Vec3> {
-    (0..=n)
-        .flat_map(|j| (0..=n).map(move |i| (i, j)))
-        .map(|(i, j)| v(f(i as f64 / n as f64, j as f64 / n as f64)))
-        .collect()
-}
-
-/// A cube's surface, `n × n` quads per side, outward, with its vertices pushed onto the sphere of radius
-/// `r` and each edge's polyline the projection of the straight cube edge.
-fn cube_sphere_network(n: usize, r: f64, samples: usize) -> Network {
-    let mut index = std::collections::HashMap::new();
-    let mut pts: Vec<[f64; 3]> = Vec::new();
-    let lattice: Vec<[usize; 3]> = (0..=n)
-        .flat_map(|i| (0..=n).flat_map(move |j| (0..=n).map(move |k| [i, j, k])))
-        .filter(|p| p.iter().any(|&c| c == 0 || c == n))
-        .collect();
-    let cube_pt = |p: [usize; 3]| p.map(|c| c as f64 / n as f64 - 0.5);
-    let project = move |q: [f64; 3]| {
-        let l = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
-        q.map(|c| c / l * r)
-    };
-    for p in &lattice {
-        index.insert(*p, pts.len());
-        pts.push(project(cube_pt(*p)));
-    }
-    let mut faces = Vec::new();
-    for axis in 0..3 {
-        let (a1, a2) = ((axis + 1) % 3, (axis + 2) % 3);
-        for side in [0, n] {
-            for i in 0..n {
-                for j in 0..n {
-                    let at = |di: usize, dj: usize| {
-                        let mut p = [0; 3];
-                        p[axis] = side;
-                        p[a1] = i + di;
-                        p[a2] = j + dj;
-                        index[&p]
-                    };
-                    let mut q = vec![at(0, 0), at(1, 0), at(1, 1), at(0, 1)];
-                    if side == 0 {
-                        q.reverse();
-                    }
-                    faces.push(q);
-                }
-            }
-        }
-    }
-    let lat = lattice.clone();
-    network_from_polygons(
-        &pts,
-        &faces,
-        move |a, b| {
-            let (pa, pb) = (cube_pt(lat[a]), cube_pt(lat[b]));
-            (0..=samples)
-                .map(|k| {
-                    let t = k as f64 / samples as f64;
-                    project([0, 1, 2].map(|d| pa[d] + t * (pb[d] - pa[d])))
-                })
-                .collect()
-        },
-        |_, _| 0.0,
-    )
-}
-
-#[test]
-fn v1_reconstructs_known_surfaces_within_half_a_percent_of_the_diagonal() {
-    let opts = V1Options::default();
-    let mut report = Vec::new();
-    // 1. A torus (genus 1): R = 0.1 m, r = 0.04 m, 8 × 6 coarse quads.
-    let (rr, r) = (0.1, 0.04);
-    let torus = move |s: f64, t: f64| {
-        let (a, b) = (TAU * s, TAU * t);
-        let rho = rr + r * b.cos();
-        [rho * a.cos(), rho * a.sin(), r * b.sin()]
-    };
-    let net = parametric_network(&torus, 8, 6, (true, true), 16);
-    let s = reconstruct_v1(&net, &opts).unwrap();
-    let truth = grid_samples(&torus, 120);
-    let d = |p: Vec3| (((p.x * p.x + p.y * p.y).sqrt() - rr).hypot(p.z) - r).abs();
-    report.push((
-        "torus 8x6",
-        s.mesh.n_vertices(),
-        hausdorff(&s, &d, &truth),
-        diag(&truth),
-    ));
-    // 2. A sphere from a cube's 2 × 2-per-side quads (valence-3 corners), R = 0.08 m.
-    let rs = 0.08;
-    let net = cube_sphere_network(2, rs, 16);
-    let s = reconstruct_v1(&net, &opts).unwrap();
-    let truth: Vec<Vec3> = (0..=60)
-        .flat_map(|j| (0..=120).map(move |i| (i, j)))
-        .map(|(i, j)| {
-            let (a, b) = (TAU * i as f64 / 120.0, PI * j as f64 / 60.0);
-            Vec3::new(b.sin() * a.cos(), b.sin() * a.sin(), b.cos()) * rs
-        })
-        .collect();
-    let d = |p: Vec3| (p.norm() - rs).abs();
-    report.push((
-        "cube-sphere 2x2x6",
-        s.mesh.n_vertices(),
-        hausdorff(&s, &d, &truth),
-        diag(&truth),
-    ));
-    // 3. A bumpy height field with a boundary, 0.2 m square, 5 × 5 coarse quads.
-    let h = |s: f64, t: f64| 0.02 * (TAU * s).sin() * (PI * t).cos() + 0.01 * (3.0 * PI * t).sin();
-    let bumpy = move |s: f64, t: f64| [0.2 * s, 0.2 * t, h(s, t)];
-    let net = parametric_network(&bumpy, 5, 5, (false, false), 16);
-    let s = reconstruct_v1(&net, &opts).unwrap();
-    let truth = grid_samples(&bumpy, 100);
-    // Vertical gap: an upper bound of the distance to the height field.
-    let d = |p: Vec3| (p.z - h(p.x / 0.2, p.y / 0.2)).abs();
-    report.push((
-        "bumpy grid 5x5",
-        s.mesh.n_vertices(),
-        hausdorff(&s, &d, &truth),
-        diag(&truth),
-    ));
-    for (name, nv, (fwd, back), dg) in &report {
-        let hd = fwd.max(*back);
-        eprintln!(
-            "{name}: {nv} vertices, Hausdorff {:.3} mm (surface→truth {:.3}, truth→surface {:.3}) = {:.3} % of the {:.1} mm diagonal",
-            hd * 1e3,
-            fwd * 1e3,
-            back * 1e3,
-            100.0 * hd / dg,
-            dg * 1e3
-        );
-    }
-    for (name, _, (fwd, back), dg) in &report {
-        assert!(fwd.max(*back) <= 0.005 * dg, "{name}");
-    }
-}
-
 // ----- basic refinement, networks from the sketching tools ------------------------------------------
 
-use fires_recon::surface::{refine, RefineOptions};
+use fires_recon::surface::{refine, CurveKeeping, RefineOptions};
+use std::f64::consts::TAU;
 
 #[test]
 fn basic_refinement_gives_quads_with_every_vertex_on_a_polyline() {
@@ -678,7 +506,37 @@ fn a_disc_sketched_with_the_tools_reconstructs_flat() {
         )
         .unwrap();
     }
-    let s = reconstruct_v1(&net, &V1Options::default()).unwrap();
+    for (a0, a1) in [(160.0f64, -20.0f64), (100.0, 250.0)] {
+        let c = common::disc::chord(a0.to_radians(), a1.to_radians(), 0.0);
+        insert_curve(&mut net, CurveInput::new(&c), &InsertOptions::default()).unwrap();
+    }
+    // A stroke from the top arc that stops on the first chord (overshooting it by 3 mm, trimmed): a
+    // T-junction, so the faces beside it get five and more sides.
+    let x = 0.025;
+    let top = common::disc::B / common::disc::R * (common::disc::R.powi(2) - x * x).sqrt();
+    let t = (x + 0.1 * 160f64.to_radians().cos().abs()) / (2.0 * 0.1 * 20f64.to_radians().cos());
+    let y_chord = 0.097 * 20f64.to_radians().sin() * (1.0 - 2.0 * t);
+    let stroke = common::disc::line([x, top, Z], [x, y_chord - 0.003, Z], 0.002);
+    insert_curve(
+        &mut net,
+        CurveInput::new(&stroke),
+        &InsertOptions::default(),
+    )
+    .unwrap();
+    let base = base_mesh(&net).unwrap();
+    let sides: Vec<usize> = base
+        .mesh
+        .faces()
+        .map(|f| base.mesh.face_valence(f))
+        .collect();
+    assert!(
+        sides.iter().any(|&n| n >= 5),
+        "the sketch has faces to triquadrify: {sides:?}"
+    );
+    // Snapping keeps the curve vertices exactly on the curves (checked below).
+    let mut opts = V1Options::default();
+    opts.catmull_clark.keep = CurveKeeping::Snap;
+    let s = reconstruct_v1(&net, &opts).unwrap();
     assert!(s.mesh.faces().all(|f| s.mesh.face_valence(f) == 4));
     let worst = s
         .mesh
@@ -693,4 +551,106 @@ fn a_disc_sketched_with_the_tools_reconstructs_flat() {
             assert!(d <= 1e-12, "curve vertex {x} is {d} m off");
         }
     }
+}
+
+#[test]
+fn a_sharp_cube_network_stays_on_the_cube_faces() {
+    // Distance of a point to the surface of the cube [0, 0.1]³.
+    let to_cube = |p: Vec3| {
+        let d = [p.x, p.y, p.z]
+            .iter()
+            .map(|&c| c.abs().min((c - 0.1).abs()))
+            .fold(f64::INFINITY, f64::min);
+        let inside = [p.x, p.y, p.z]
+            .iter()
+            .all(|&c| (-1e-12..=0.1 + 1e-12).contains(&c));
+        if inside {
+            d
+        } else {
+            f64::INFINITY
+        }
+    };
+    let worst_off = |s: &ControlMesh| {
+        s.mesh
+            .vertices()
+            .map(|x| to_cube(s.mesh.position(x)))
+            .fold(0.0, f64::max)
+    };
+    // The whole of V1 on the sharp cube keeps every vertex on the cube's faces.
+    let sharp = reconstruct_v1(&cube_network(1.0), &V1Options::default()).unwrap();
+    assert!(
+        worst_off(&sharp) <= 1e-9 * 0.1,
+        "sharp cube: {}",
+        worst_off(&sharp)
+    );
+    // The interpolatory rules themselves (no snapping): the sharp rules keep each side of a crease to
+    // itself; without sharp curves the four-point rule reaches across the cube's edges and bulges.
+    let plain = NulissOptions {
+        snap_to_curves: false,
+    };
+    let opts = V1Options::default();
+    let s = nuliss_mod(&refined_v1(&cube_network(1.0), &opts).unwrap(), &plain).unwrap();
+    assert!(
+        worst_off(&s) <= 1e-9 * 0.1,
+        "sharp rules: {}",
+        worst_off(&s)
+    );
+    let s = nuliss_mod(&refined_v1(&cube_network(0.0), &opts).unwrap(), &plain).unwrap();
+    assert!(worst_off(&s) > 1e-4, "smooth rules: {}", worst_off(&s));
+}
+
+#[test]
+fn a_one_sided_loop_face_becomes_a_triangle_split_in_thirds() {
+    let ring: Vec<[f64; 3]> = (0..=60)
+        .map(|i| {
+            let a = TAU * i as f64 / 60.0;
+            [0.05 * a.cos(), 0.05 * a.sin(), 0.3]
+        })
+        .collect();
+    let first = ring[0];
+    let net = network_from_polygons(&[first], &[vec![0]], move |_, _| ring.clone(), |_, _| 0.0);
+    let cm = base_mesh(&net).unwrap();
+    assert_eq!((cm.mesh.n_vertices(), cm.mesh.n_faces()), (3, 1));
+    let len = cm.curves[0].length();
+    let mut ts: Vec<f64> = cm
+        .vertex_tag
+        .iter()
+        .filter_map(|t| match t {
+            VertexTag::OnCurve(p) => Some(p.t / len),
+            _ => None,
+        })
+        .collect();
+    ts.sort_by(f64::total_cmp);
+    assert!((ts[0] - 1.0 / 3.0).abs() < 1e-15 && (ts[1] - 2.0 / 3.0).abs() < 1e-15);
+    assert_spans_on_curves(&cm, 1e-15);
+    let s = reconstruct_v1(&net, &V1Options::default()).unwrap();
+    let worst = s
+        .mesh
+        .vertices()
+        .map(|x| (s.mesh.position(x).z - 0.3).abs())
+        .fold(0.0, f64::max);
+    assert!(worst <= 1e-9 * 0.1, "off-plane {worst}");
+}
+
+#[test]
+fn a_face_through_a_vertex_twice_is_refused_with_its_name() {
+    // A bow tie: one loop through vertex 0 twice.
+    let p = [
+        [0.0, 0.0, 0.0],
+        [0.1, 0.05, 0.0],
+        [0.1, -0.05, 0.0],
+        [-0.1, 0.05, 0.0],
+        [-0.1, -0.05, 0.0],
+    ];
+    let net = network_from_polygons(
+        &p,
+        &[vec![0, 1, 2, 0, 4, 3]],
+        move |a, b| straight(p[a], p[b], 4),
+        |_, _| 0.0,
+    );
+    let e = base_mesh(&net).unwrap_err();
+    assert!(
+        matches!(&e, SurfaceError::UnsupportedFace { face, reason } if face == "f0" && reason.contains("twice")),
+        "{e}"
+    );
 }

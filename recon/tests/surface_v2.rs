@@ -5,13 +5,16 @@ mod common;
 mod surface_common;
 
 use common::disc::{circle, line, vertical, B, R, Z};
+use common::netgen::{network_from_polygons, parametric_network, MeshDistance};
+use fires_recon::network::Network;
 use fires_recon::network::{build_network, BuildOptions, StrokeInput};
+use std::f64::consts::{PI, TAU};
 
 use fires_recon::geometry::Vec3;
 use fires_recon::mesh::{Face, SurfaceMesh};
 use fires_recon::surface::{
-    base_mesh, reconstruct_v2, reconstruct_v2_from_base, tessellate, v2_refined, ControlMesh,
-    DiffusionOptions, TessellateOptions, V2Options, VertexTag,
+    base_mesh, reconstruct_v2, reconstruct_v2_from_base, surface_diffusion, tessellate, v2_refined,
+    ControlMesh, CurvatureField, DiffusionOptions, TessellateOptions, V2Options, VertexTag,
 };
 use surface_common::{control, cube, face_normal, face_planarity, CurveSpec};
 
@@ -88,7 +91,21 @@ fn normal_jump_deg(c: &ControlMesh, sharp: bool) -> (f64, usize) {
             (nf * 1.5 - ng * 0.5).normalize_or_zero()
         };
         let (na, nb) = (ext(a, a2), ext(b, b2));
-        worst = worst.max(na.dot(nb).clamp(-1.0, 1.0).acos().to_degrees());
+        let j = na.dot(nb).clamp(-1.0, 1.0).acos().to_degrees();
+        if j > worst && std::env::var("WHERE").is_ok() {
+            let (p, q) = m.edge_vertices(e);
+            eprintln!(
+                "  jump {j:.3} at {:?} tags {:?} {:?} boundary-near {}",
+                (m.position(p) + m.position(q)) * 0.5,
+                c.tag(p),
+                c.tag(q),
+                m.is_boundary_face(a2)
+                    || m.is_boundary_face(b2)
+                    || m.is_boundary_face(a)
+                    || m.is_boundary_face(b)
+            );
+        }
+        worst = worst.max(j);
         n += 1;
     }
     (worst, n)
@@ -168,7 +185,7 @@ fn a_cube_with_sharp_edges() {
     let (jump, n) = normal_jump_deg(&c, true);
     eprintln!("cube: {} v, face planarity {worst:.2e}, off the cube {off_cube:.2e}, crease angle {jump:.3}° over {n}", c.mesh.n_vertices());
     assert!(off_cube <= 0.005 * edge);
-    assert!(n > 0 && jump >= 80.0 && jump <= 100.0, "{jump}");
+    assert!(n > 0 && (80.0..=100.0).contains(&jump), "{jump}");
 }
 
 #[test]
@@ -241,9 +258,11 @@ fn tessellation_makes_sixteen_n_quads_with_curve_vertices_on_the_curves() {
 #[test]
 fn hard_constraints_keep_every_curve_vertex_exactly() {
     let base = sphere_network(1.0);
-    let mut o = V2Options::default();
-    o.diffusion = DiffusionOptions {
-        hard: true,
+    let o = V2Options {
+        diffusion: DiffusionOptions {
+            hard: true,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let t = tessellate(&base, &o.tessellate).unwrap();
@@ -340,4 +359,223 @@ fn a_curved_network_from_strokes_is_smooth_across_its_curves_and_keeps_them() {
     assert!(jump <= 1.0, "{jump}");
     assert!(cd <= 1e-5, "{cd}");
     assert!(rms <= 0.003 * diag, "{rms}");
+}
+
+fn hausdorff(s: &ControlMesh, dist: &dyn Fn(Vec3) -> f64, truth: &[Vec3]) -> (f64, f64) {
+    let m = &s.mesh;
+    let fwd = m
+        .vertices()
+        .map(|x| dist(m.position(x)))
+        .fold(0.0f64, f64::max);
+    let q = MeshDistance::new(m);
+    let back = truth.iter().map(|&p| q.distance(p)).fold(0.0, f64::max);
+    (fwd, back)
+}
+
+fn diag(pts: &[Vec3]) -> f64 {
+    let lo = pts
+        .iter()
+        .fold(Vec3::new(f64::MAX, f64::MAX, f64::MAX), |a, p| {
+            Vec3::new(a.x.min(p.x), a.y.min(p.y), a.z.min(p.z))
+        });
+    let hi = pts
+        .iter()
+        .fold(Vec3::new(f64::MIN, f64::MIN, f64::MIN), |a, p| {
+            Vec3::new(a.x.max(p.x), a.y.max(p.y), a.z.max(p.z))
+        });
+    (hi - lo).norm()
+}
+
+fn grid_samples(f: &dyn Fn(f64, f64) -> [f64; 3], n: usize) -> Vec<Vec3> {
+    (0..=n)
+        .flat_map(|j| (0..=n).map(move |i| (i, j)))
+        .map(|(i, j)| Vec3::from_array(f(i as f64 / n as f64, j as f64 / n as f64)))
+        .collect()
+}
+
+/// A cube's surface, `n × n` quads per side, outward, with its vertices pushed onto the sphere of radius
+/// `r` and each edge's polyline the projection of the straight cube edge.
+fn cube_sphere_network(n: usize, r: f64, samples: usize) -> Network {
+    let mut index = std::collections::HashMap::new();
+    let mut pts: Vec<[f64; 3]> = Vec::new();
+    let lattice: Vec<[usize; 3]> = (0..=n)
+        .flat_map(|i| (0..=n).flat_map(move |j| (0..=n).map(move |k| [i, j, k])))
+        .filter(|p| p.iter().any(|&c| c == 0 || c == n))
+        .collect();
+    let cube_pt = |p: [usize; 3]| p.map(|c| c as f64 / n as f64 - 0.5);
+    let project = move |q: [f64; 3]| {
+        let l = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+        q.map(|c| c / l * r)
+    };
+    for p in &lattice {
+        index.insert(*p, pts.len());
+        pts.push(project(cube_pt(*p)));
+    }
+    let mut faces = Vec::new();
+    for axis in 0..3 {
+        let (a1, a2) = ((axis + 1) % 3, (axis + 2) % 3);
+        for side in [0, n] {
+            for i in 0..n {
+                for j in 0..n {
+                    let at = |di: usize, dj: usize| {
+                        let mut p = [0; 3];
+                        p[axis] = side;
+                        p[a1] = i + di;
+                        p[a2] = j + dj;
+                        index[&p]
+                    };
+                    let mut q = vec![at(0, 0), at(1, 0), at(1, 1), at(0, 1)];
+                    if side == 0 {
+                        q.reverse();
+                    }
+                    faces.push(q);
+                }
+            }
+        }
+    }
+    let lat = lattice.clone();
+    network_from_polygons(
+        &pts,
+        &faces,
+        move |a, b| {
+            let (pa, pb) = (cube_pt(lat[a]), cube_pt(lat[b]));
+            (0..=samples)
+                .map(|k| {
+                    let t = k as f64 / samples as f64;
+                    project([0, 1, 2].map(|d| pa[d] + t * (pb[d] - pa[d])))
+                })
+                .collect()
+        },
+        |_, _| 0.0,
+    )
+}
+
+#[test]
+fn v2_reconstructs_known_surfaces_within_half_a_percent_of_the_diagonal() {
+    let opts = V2Options::default();
+    let mut report = Vec::new();
+    // 1. A torus (genus 1): R = 0.1 m, r = 0.04 m, 8 × 6 coarse quads.
+    let (rr, r) = (0.1, 0.04);
+    let torus = move |s: f64, t: f64| {
+        let (a, b) = (TAU * s, TAU * t);
+        let rho = rr + r * b.cos();
+        [rho * a.cos(), rho * a.sin(), r * b.sin()]
+    };
+    let net: Network = parametric_network(&torus, 8, 6, (true, true), 16);
+    let s = reconstruct_v2(&net, &opts).unwrap();
+    let truth = grid_samples(&torus, 120);
+    let d = |p: Vec3| (((p.x * p.x + p.y * p.y).sqrt() - rr).hypot(p.z) - r).abs();
+    report.push((
+        "torus 8x6",
+        s.mesh.n_vertices(),
+        hausdorff(&s, &d, &truth),
+        diag(&truth),
+        normal_jump_deg(&s, false).0,
+    ));
+    // 2. A sphere from a cube's 2 × 2-per-side quads (valence-3 corners), R = 0.08 m.
+    let rs = 0.08;
+    let net = cube_sphere_network(2, rs, 16);
+    let s = reconstruct_v2(&net, &opts).unwrap();
+    let truth: Vec<Vec3> = (0..=60)
+        .flat_map(|j| (0..=120).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            let (a, b) = (TAU * i as f64 / 120.0, PI * j as f64 / 60.0);
+            Vec3::new(b.sin() * a.cos(), b.sin() * a.sin(), b.cos()) * rs
+        })
+        .collect();
+    let d = |p: Vec3| (p.norm() - rs).abs();
+    report.push((
+        "cube-sphere 2x2x6",
+        s.mesh.n_vertices(),
+        hausdorff(&s, &d, &truth),
+        diag(&truth),
+        normal_jump_deg(&s, false).0,
+    ));
+    // 3. A bumpy height field with a boundary, 0.2 m square, 5 × 5 coarse quads.
+    let h = |s: f64, t: f64| 0.02 * (TAU * s).sin() * (PI * t).cos() + 0.01 * (3.0 * PI * t).sin();
+    let bumpy = move |s: f64, t: f64| [0.2 * s, 0.2 * t, h(s, t)];
+    let net = parametric_network(&bumpy, 5, 5, (false, false), 16);
+    let s = reconstruct_v2(&net, &opts).unwrap();
+    let truth = grid_samples(&bumpy, 100);
+    let d = |p: Vec3| (p.z - h(p.x / 0.2, p.y / 0.2)).abs();
+    report.push((
+        "bumpy grid 5x5",
+        s.mesh.n_vertices(),
+        hausdorff(&s, &d, &truth),
+        diag(&truth),
+        normal_jump_deg(&s, false).0,
+    ));
+    for (name, nv, (fwd, back), dg, jump) in &report {
+        let hd = fwd.max(*back);
+        eprintln!(
+            "V2 {name}: {nv} vertices, Hausdorff {:.3} mm (surface→truth {:.3}, truth→surface {:.3}) = {:.3} % of the {:.1} mm diagonal; normal jump across curves {jump:.3}°",
+            hd * 1e3,
+            fwd * 1e3,
+            back * 1e3,
+            100.0 * hd / dg,
+            dg * 1e3
+        );
+    }
+    for (name, _, (fwd, back), dg, jump) in &report {
+        assert!(fwd.max(*back) <= 0.005 * dg, "{name}");
+        assert!(*jump <= 1.0, "{name}: {jump}°");
+    }
+}
+
+#[test]
+fn the_scalar_flow_keeps_a_sphere_better_than_the_vector_flow() {
+    // The tessellated octahedron pushed onto the unit sphere: constant mean curvature, so diffusing H
+    // changes nothing and the refit keeps the sphere up to the discretisation of δ on these coarse,
+    // irregular quads (h ≈ R/5; measured rms 2.5e-3 R); the vector field shrinks the normals and flattens
+    // the patches (rms 7e-3 to 9e-3 R).
+    let mut t = tessellate(&sphere_network(1.0), &TessellateOptions::default()).unwrap();
+    for p in t.mesh.positions_mut() {
+        *p = *p / p.norm();
+    }
+    let mut out = Vec::new();
+    for field in [CurvatureField::Scalar, CurvatureField::Vector] {
+        for hard in [false, true] {
+            let o = DiffusionOptions {
+                field,
+                hard,
+                ..Default::default()
+            };
+            let f = surface_diffusion(&t, &o).unwrap();
+            let (rms, max) = radial_errors(&f.mesh, 1.0);
+            eprintln!(
+                "sphere under the flow, {field:?} hard {hard}: radial rms {rms:.2e} max {max:.2e}"
+            );
+            out.push((rms, max));
+        }
+    }
+    // The scalar field keeps the sphere better than the vector field of eq. 6.3 as printed.
+    assert!(out[0].0 < out[2].0 && out[1].0 < out[3].0, "{out:?}");
+    for (rms, max) in &out[..2] {
+        assert!(*rms < 3.5e-3 && *max < 1.5e-2, "{rms} {max}");
+    }
+}
+
+#[test]
+fn bad_inputs_are_errors_not_panics() {
+    assert!(reconstruct_v2(&Network::new(), &V2Options::default()).is_err());
+    // A control mesh without curve vertices has nothing to hold the flow.
+    let mut free = sphere_network(1.0);
+    for t in &mut free.vertex_tag {
+        *t = VertexTag::Free;
+    }
+    for s in &mut free.edge_curve {
+        *s = None;
+    }
+    assert!(reconstruct_v2_from_base(&free, &V2Options::default()).is_err());
+    // A tag naming a curve that does not exist.
+    let mut bad = sphere_network(1.0);
+    bad.edge_curve[0] = bad.edge_curve[0].map(|mut s| {
+        s.curve = 99;
+        s
+    });
+    assert!(reconstruct_v2_from_base(&bad, &V2Options::default()).is_err());
+    // Non-finite positions.
+    let mut nan = sphere_network(1.0);
+    nan.mesh.positions_mut()[0].x = f64::NAN;
+    assert!(reconstruct_v2_from_base(&nan, &V2Options::default()).is_err());
 }

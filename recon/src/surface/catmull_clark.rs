@@ -20,18 +20,20 @@
 //! # Keeping the curves ([`CurveKeeping`])
 //! Catmull-Clark approximates: left alone it pulls the surface off the drawn curves (a crease's limit is the
 //! cubic B-spline of its vertices). Two remedies, chosen by [`CatmullClarkOptions::keep`]:
-//! * [`CurveKeeping::Snap`] (FIRES thesis §6.3, NULISSmod's edge rule): every curve vertex is
+//! * [`CurveKeeping::Snap`] (the default; FIRES thesis §6.3, NULISSmod's edge rule): every curve vertex is
 //!   put at its curve point (its parameter's point on the polyline) and every curve edge's edge point at its
-//!   span's mid-parameter point. All other points use the rules above, so the vertices next to a non-sharp
-//!   curve average both sides and the surface bends smoothly across it; the price is a ridge along the curve (the
-//!   Catmull-Clark shrinkage undone on the curve only): measured on the sphere of three great circles, the
-//!   normals across the curves differ by 25° after three levels, so this mode suits sharp curves only;
-//! * [`CurveKeeping::Limit`] (the default; Schaefer, Warren & Zorin, *Lofting curve networks using subdivision surfaces*,
+//!   span's mid-parameter point. All other points use the rules above (the vertices next to a non-sharp
+//!   curve average both sides), but undoing the Catmull-Clark shrinkage on the curve only leaves a ridge
+//!   along it: measured on the sphere of three great circles (FIRESV2, soft flow), the
+//!   normals across the curves differ by 25° after three levels, so this mode suits sharp curves, or levels
+//!   followed by ones of another kind;
+//! * [`CurveKeeping::Limit`] (FIRESV2's choice; Schaefer, Warren & Zorin, *Lofting curve networks using subdivision surfaces*,
 //!   SGP 2004, §4, in spirit: move the control points so that the limit surface passes through the curves):
 //!   before the step, the curve vertices are moved (Gauss-Seidel on the limit stencils) so that their
-//!   Catmull-Clark limit positions are their curve points, then the plain rules apply; finish with
+//!   Catmull-Clark limit positions are their curve points (on the C1 cubic through the polyline's samples,
+//!   [`smooth_point_at`]), then the plain rules apply; finish with
 //!   [`limit_positions`]. The surface stays C1 across non-sharp curves and passes through the curve vertices
-//!   of every level (same sphere: 0.09°).
+//!   of every level (same sphere: 0.04°; a bumpy height-field grid 0.5°).
 //! * [`CurveKeeping::None`]: the plain rules.
 
 use super::control::{ControlMesh, CurvePoint, CurveSpan, VertexTag};
@@ -45,16 +47,17 @@ pub enum CurveKeeping {
     /// Plain sharp Catmull-Clark: the surface leaves the curves.
     None,
     /// Curve vertices and curve edge points are put on their curves.
+    #[default]
     Snap,
     /// Curve vertices are moved so the limit surface passes through their curve points.
-    #[default]
     Limit,
 }
 
 /// Options of [`catmull_clark`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CatmullClarkOptions {
-    /// How the curves are kept (default [`CurveKeeping::Limit`]).
+    /// How the curves are kept (default [`CurveKeeping::Snap`], exact at every level; FIRESV2 uses
+    /// [`CurveKeeping::Limit`], see the module docs).
     pub keep: CurveKeeping,
     /// Boundary edges are creases (the usual boundary rules); default true.
     pub boundary_is_crease: bool,
@@ -65,7 +68,7 @@ pub struct CatmullClarkOptions {
 impl Default for CatmullClarkOptions {
     fn default() -> Self {
         Self {
-            keep: CurveKeeping::Limit,
+            keep: CurveKeeping::Snap,
             boundary_is_crease: true,
             limit_fit_sweeps: 8,
         }
@@ -163,6 +166,57 @@ pub fn curve_target(c: &ControlMesh, v: Vertex) -> Option<Vec3> {
     }
 }
 
+/// [`curve_target`] on the C1 cubic (Hermite, arc-length parameters) through the curve's samples
+/// instead of the polyline: the target the limit fit uses, so that a surface finer than the polyline's
+/// sampling does not inherit the polyline's kinks at its samples (it still passes through every sample).
+pub fn smooth_curve_target(c: &ControlMesh, v: Vertex) -> Option<Vec3> {
+    match c.tag(v) {
+        VertexTag::OnCurve(p) => c.curves.get(p.curve).map(|cv| smooth_point_at(cv, p.t)),
+        _ => curve_target(c, v),
+    }
+}
+
+/// The point at arc length `t` of the cubic Hermite interpolant of `curve`'s samples in arc length, with
+/// three-point parabolic tangents (C1, third-order accurate between samples).
+pub fn smooth_point_at(curve: &super::control::Curve, t: f64) -> Vec3 {
+    let (p, a) = (&curve.points, &curve.arc);
+    let n = p.len();
+    if n < 3 || a.len() != n || t <= 0.0 || t >= curve.length() {
+        return curve.point_at(t);
+    }
+    let j = a.partition_point(|&x| x <= t).clamp(1, n - 1);
+    let (a0, a1) = (a[j - 1], a[j]);
+    let h = a1 - a0;
+    if h <= 0.0 {
+        return curve.point_at(t);
+    }
+    // Derivative of the parabola through three consecutive samples (second-order accurate for any
+    // spacing), at the middle sample inside the curve and at the end sample at its ends.
+    let tangent = |k: usize| {
+        let i = k.clamp(1, n - 2);
+        let (h0, h1) = (a[i] - a[i - 1], a[i + 1] - a[i]);
+        if h0 <= 0.0 || h1 <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let (q0, q1, q2) = (p[i - 1], p[i], p[i + 1]);
+        let s = h0 + h1;
+        if k == 0 {
+            q0 * (-(2.0 * h0 + h1) / (h0 * s)) + q1 * (s / (h0 * h1)) - q2 * (h0 / (h1 * s))
+        } else if k == n - 1 {
+            q0 * (h1 / (h0 * s)) - q1 * (s / (h0 * h1)) + q2 * ((2.0 * h1 + h0) / (h1 * s))
+        } else {
+            q0 * (-h1 / (h0 * s)) + q1 * ((h1 - h0) / (h0 * h1)) + q2 * (h0 / (h1 * s))
+        }
+    };
+    let (m0, m1) = (tangent(j - 1) * h, tangent(j) * h);
+    let s = (t - a0) / h;
+    let (s2, s3) = (s * s, s * s * s);
+    p[j - 1] * (2.0 * s3 - 3.0 * s2 + 1.0)
+        + m0 * (s3 - 2.0 * s2 + s)
+        + p[j] * (-2.0 * s3 + 3.0 * s2)
+        + m1 * (s3 - s2)
+}
+
 /// The Catmull-Clark limit position of every vertex of an all-quad mesh, with the crease rules of the
 /// module docs: smooth `(n²v + 4Σeⱼ + Σfⱼ)/(n(n + 5))` (Halstead, Kass & DeRose, *Efficient, fair
 /// interpolation using Catmull-Clark surfaces*, SIGGRAPH 1993, appendix A: eⱼ the edge neighbours, fⱼ the
@@ -223,7 +277,7 @@ fn fit_limit(c: &ControlMesh, cls: &Classes, sweeps: usize) -> Vec<Vec3> {
     let targets: Vec<(Vertex, Vec3)> = m
         .vertices()
         .filter(|&v| cls.rule[v.idx()] != Rule::Fixed)
-        .filter_map(|v| curve_target(c, v).map(|t| (v, t)))
+        .filter_map(|v| smooth_curve_target(c, v).map(|t| (v, t)))
         .collect();
     gauss_seidel(m, cls, m.positions().to_vec(), &targets, sweeps)
 }
@@ -261,7 +315,7 @@ pub fn interpolating_control(
     let targets: Vec<(Vertex, Vec3)> = m
         .vertices()
         .filter(|&v| cls.rule[v.idx()] != Rule::Fixed)
-        .map(|v| (v, curve_target(c, v).unwrap_or(m.position(v))))
+        .map(|v| (v, smooth_curve_target(c, v).unwrap_or(m.position(v))))
         .collect();
     let p = gauss_seidel(m, &cls, m.positions().to_vec(), &targets, sweeps);
     let mut out = c.clone();

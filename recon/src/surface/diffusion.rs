@@ -40,12 +40,14 @@ use faer::Mat;
 
 use super::control::{ControlMesh, VertexTag};
 use super::error::SurfaceError;
-use super::quad_cotan::{vertex_normals_at, QuadCotan};
+use super::quad_cotan::{vertex_normals_at, Assembly, QuadCotan};
 use crate::geometry::Vec3;
 use crate::solve::{
-    sparse_from_triplets, sparse_mul_dense, weighted_gram, CholeskyOptions, CholeskySolver,
-    FixedSolver, SolveError, SparseMatrix,
+    sparse_mul_dense, CholeskyOptions, CholeskySolver, FixedSolver, SolveError, SparseMatrix,
 };
+use faer::reborrow::ReborrowMut;
+use faer::sparse::linalg::matmul::sparse_sparse_matmul;
+use faer::Par;
 
 /// Which curvature field STEP 1 diffuses (module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -112,6 +114,8 @@ pub struct SurfaceDiffusion {
     sharp_count: Vec<f64>,
     h2: f64,
     ops: QuadCotan,
+    asm: Assembly,
+    cmat: SparseMatrix,
     step1: CholeskySolver,
     step2: Step2,
 }
@@ -153,8 +157,9 @@ impl SurfaceDiffusion {
             return Err(SurfaceError::Degenerate("zero-length edges".into()));
         }
         let ops = QuadCotan::new(m, &x0);
+        let asm = Assembly::new(x0.len(), &ops.pairs).map_err(solve_err)?;
         let h2 = mean_edge * mean_edge;
-        let (a1, a2, _) = matrices(opts, &ops, &sharp_count, &constrained, h2)?;
+        let (a1, a2, cmat) = matrices(opts, &asm, &ops, &sharp_count, &constrained, h2)?;
         let step1 =
             CholeskySolver::new(a1.as_ref(), CholeskyOptions::default()).map_err(solve_err)?;
         let step2 = if opts.hard {
@@ -176,6 +181,8 @@ impl SurfaceDiffusion {
             sharp_count,
             h2,
             ops,
+            asm,
+            cmat,
             step1,
             step2,
         })
@@ -185,18 +192,13 @@ impl SurfaceDiffusion {
     pub fn run(&mut self) -> Result<ControlMesh, SurfaceError> {
         let n = self.x0.len();
         let mut x = self.x0.clone();
-        let (_, _, mut c) = matrices(
-            &self.opts,
-            &self.ops,
-            &self.sharp_count,
-            &self.constrained,
-            self.h2,
-        )?;
+        let mut c = self.cmat.clone();
         for it in 0..self.opts.outer_iterations {
             if it > 0 && self.opts.update_operators {
                 self.ops = QuadCotan::new(&self.c.mesh, &x);
                 let (a1, a2, c_new) = matrices(
                     &self.opts,
+                    &self.asm,
                     &self.ops,
                     &self.sharp_count,
                     &self.constrained,
@@ -277,36 +279,30 @@ impl SurfaceDiffusion {
 /// `(STEP 1 matrix M + τh̄²K_w, STEP 2 normal matrix, C)` at the current operators.
 fn matrices(
     opts: &DiffusionOptions,
+    asm: &Assembly,
     ops: &QuadCotan,
     sharp_count: &[f64],
     constrained: &[usize],
     h2: f64,
 ) -> Result<(SparseMatrix, SparseMatrix, SparseMatrix), SurfaceError> {
     let n = ops.area.len();
-    let s2 = opts.sigma * opts.sigma;
+    let s2 = (opts.sigma * opts.sigma).max(1e-300);
     let s = sharp_count;
-    let w = |i: usize, j: usize| (-(s[i] - s[j]).abs() / s2.max(1e-300)).exp();
+    let w = |i: usize, j: usize| (-(s[i] - s[j]).abs() / s2).exp();
     let dt = opts.tau * h2;
-    // K_w = −C_w: negate the Laplacian-like triplets.
-    let mut t1: Vec<(usize, usize, f64)> = ops
-        .triplets(w, true)
-        .into_iter()
-        .map(|(i, j, v)| (i, j, -dt * v))
-        .collect();
-    t1.extend(ops.area.iter().enumerate().map(|(i, &a)| (i, i, a)));
-    let a1 = sparse_from_triplets(n, n, &t1).map_err(solve_err)?;
-    let c = sparse_from_triplets(n, n, &ops.triplets(|_, _| 1.0, false)).map_err(solve_err)?;
-    let a2 = if opts.hard {
-        weighted_gram(n, &[(1.0, c.as_ref())]).map_err(solve_err)?
-    } else {
-        let sel: Vec<_> = constrained
-            .iter()
-            .enumerate()
-            .map(|(r, &i)| (r, i, 1.0))
-            .collect();
-        let sel = sparse_from_triplets(constrained.len(), n, &sel).map_err(solve_err)?;
-        weighted_gram(n, &[(1.0, c.as_ref()), (opts.lambda, sel.as_ref())]).map_err(solve_err)?
-    };
+    // M − τh̄² C_w (C_w clamped: an M-matrix).
+    let a1 = asm.build(&ops.pairs, w, true, -dt, &ops.area);
+    let c = asm.build(&ops.pairs, |_, _| 1.0, false, 1.0, &vec![0.0; n]);
+    // CᵀC = C² (C is symmetric) + λ on the constrained diagonal.
+    let mut a2 = sparse_sparse_matmul(c.as_ref(), c.as_ref(), 1.0, Par::Seq)
+        .map_err(|_| solve_err(SolveError::OutOfMemory))?;
+    if !opts.hard {
+        for &i in constrained {
+            if let Some(v) = a2.rb_mut().get_mut(i, i) {
+                *v += opts.lambda;
+            }
+        }
+    }
     Ok((a1, a2, c))
 }
 

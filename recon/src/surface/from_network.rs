@@ -16,12 +16,38 @@
 //! becomes a triangle and a 1-sided face a triangle, so every face has at least three sides.
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 use super::control::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};
 use super::error::SurfaceError;
 use crate::geometry::Vec3;
 use crate::mesh::SurfaceMesh;
 use crate::network::{EdgeId, Network, VertexId};
+
+/// A fast hasher for integer keys (vertex pairs): multiply-rotate, as rustc's FxHash. Not DoS-resistant,
+/// which does not matter for keys the stages make themselves.
+#[derive(Default, Clone, Copy)]
+pub(crate) struct IntHasher(u64);
+
+impl Hasher for IntHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_usize(&mut self, x: usize) {
+        self.write_u64(x as u64);
+    }
+}
+
+/// A map keyed by directed vertex pairs.
+pub(crate) type PairMap<V> = HashMap<(usize, usize), V, BuildHasherDefault<IntHasher>>;
 
 /// A control mesh under construction: polygons as vertex-index lists, with the curve span of each directed
 /// vertex pair that follows a curve (`t0` at the first vertex).
@@ -34,7 +60,7 @@ pub(crate) struct Builder {
     /// Polygons.
     pub faces: Vec<Vec<usize>>,
     /// Curve spans of directed vertex pairs (one direction is enough).
-    pub spans: HashMap<(usize, usize), CurveSpan>,
+    pub spans: PairMap<CurveSpan>,
     /// The curves.
     pub curves: Vec<Curve>,
 }
@@ -42,21 +68,28 @@ pub(crate) struct Builder {
 impl Builder {
     /// A builder holding `cm`'s vertices, tags, curves and curve spans, without its faces.
     pub fn from_control(cm: &ControlMesh) -> Self {
+        let mut b = Self::from_control_without_spans(cm);
         let m = &cm.mesh;
-        let mut spans = HashMap::with_capacity(m.n_edges());
+        b.spans.reserve(m.n_edges());
         for e in m.edges() {
             if let Some(s) = cm.span(e) {
-                let (a, b) = m.edge_vertices(e);
-                spans.insert((a.idx(), b.idx()), s);
+                let (a, z) = m.edge_vertices(e);
+                b.spans.insert((a.idx(), z.idx()), s);
             }
         }
+        b
+    }
+
+    /// [`Self::from_control`] without the spans (for stages that split every edge).
+    pub fn from_control_without_spans(cm: &ControlMesh) -> Self {
+        let m = &cm.mesh;
         let mut tags = cm.vertex_tag.clone();
         tags.resize(m.vertices_size(), VertexTag::Free);
         Builder {
             points: m.positions().to_vec(),
             tags,
             faces: Vec::new(),
-            spans,
+            spans: PairMap::default(),
             curves: cm.curves.clone(),
         }
     }
@@ -143,7 +176,7 @@ pub fn base_mesh(net: &Network) -> Result<ControlMesh, SurfaceError> {
         let mut curve = Curve::new(points, pl.attrs.sharpness >= 0.5);
         curve.source = Some(ed.polyline.idx());
         let len = curve.length();
-        if !(len > 0.0) {
+        if len.is_nan() || len <= 0.0 {
             return Err(SurfaceError::Degenerate(format!(
                 "edge {e}'s polyline has zero length"
             )));

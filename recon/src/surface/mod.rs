@@ -29,7 +29,7 @@ mod v2;
 
 pub use catmull_clark::{
     catmull_clark, catmull_clark_n, curve_target, interpolating_control, limit_positions,
-    CatmullClarkOptions, CurveKeeping,
+    smooth_curve_target, smooth_point_at, CatmullClarkOptions, CurveKeeping,
 };
 pub use compare::{
     compare_surface, point_distances, sample_triangles, CompareError, CompareOptions,
@@ -45,5 +45,5 @@ pub use quad_cotan::{vertex_normals_at, QuadCotan};
 pub use refine::{refine, refine_step, RefineOptions};
 pub use tessellate::{tessellate, tessellate_step, TessellateOptions};
 pub use triquad::{triquadrify, TriquadOptions};
-pub use v1::{reconstruct_v1, refined_v1, subdivide_v1, V1Options};
+pub use v1::{reconstruct_v1, refined_v1, subdivide_v1, without_generated, V1Options};
 pub use v2::{reconstruct_v2, reconstruct_v2_from_base, subdivide, v2_refined, V2Options};

@@ -30,7 +30,7 @@ use super::coons::{chord_params, halfedge_span, span_points, CoonsPatch};
 use super::error::SurfaceError;
 use super::from_network::Builder;
 use crate::geometry::Vec3;
-use crate::mesh::{Halfedge, SurfaceMesh};
+use crate::mesh::Halfedge;
 
 /// Options of [`nuliss_mod`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -49,15 +49,19 @@ impl Default for NulissOptions {
 }
 
 /// The vertex continuing the mesh line of outgoing halfedge `h` backwards through its source, if any.
-fn continuation(m: &SurfaceMesh, h: Halfedge) -> Option<Vec3> {
+/// Creases (edges along sharp curves) act as boundaries: a line along a crease continues along the
+/// crease's other edge, a line crossing one has no continuation (module doc, sharp rules).
+fn continuation(cm: &ControlMesh, h: Halfedge) -> Option<Vec3> {
+    let m = &cm.mesh;
     let v = m.from_vertex(h);
-    if m.is_boundary_vertex(v) {
-        if !m.is_boundary_edge(h.edge()) {
+    let crease = |g: Halfedge| m.is_boundary_edge(g.edge()) || cm.is_sharp(g.edge());
+    let creases = m.vertex_halfedges(v).filter(|&g| crease(g)).count();
+    if creases > 0 {
+        if creases != 2 || !crease(h) || (cm.tag(v) == VertexTag::Corner && cm.sharp_valence(v) > 0)
+        {
             return None;
         }
-        let other = m
-            .vertex_halfedges(v)
-            .find(|&g| g != h && m.is_boundary_edge(g.edge()))?;
+        let other = m.vertex_halfedges(v).find(|&g| g != h && crease(g))?;
         return Some(m.position(m.to_vertex(other)));
     }
     if m.valence(v) != 4 {
@@ -76,8 +80,7 @@ pub fn nuliss_mod(cm: &ControlMesh, opts: &NulissOptions) -> Result<ControlMesh,
             m.face_valence(f)
         )));
     }
-    let mut b = Builder::from_control(cm);
-    b.spans.clear();
+    let mut b = Builder::from_control_without_spans(cm);
     // Edge points: vertex index and, on curves, the curve parameter.
     let mut ep: Vec<usize> = vec![usize::MAX; m.edges_size()];
     let mut ep_t: Vec<f64> = vec![f64::NAN; m.edges_size()];
@@ -85,8 +88,8 @@ pub fn nuliss_mod(cm: &ControlMesh, opts: &NulissOptions) -> Result<ControlMesh,
         let h = e.halfedge(0);
         let (a, z) = (m.from_vertex(h), m.to_vertex(h));
         let (p1, p2) = (m.position(a), m.position(z));
-        let p0 = continuation(m, h).unwrap_or(p1 * 2.0 - p2);
-        let p3 = continuation(m, h.opposite()).unwrap_or(p2 * 2.0 - p1);
+        let p0 = continuation(cm, h).unwrap_or(p1 * 2.0 - p2);
+        let p3 = continuation(cm, h.opposite()).unwrap_or(p2 * 2.0 - p1);
         let four = (p1 + p2) * (9.0 / 16.0) - (p0 + p3) * (1.0 / 16.0);
         let span = cm
             .span(e)

@@ -10,8 +10,11 @@
 //! for linear precision (a planar mesh has `L X = 0` at every interior vertex); callers that need an
 //! M-matrix clamp them.
 
+use faer::sparse::SymbolicSparseColMat;
+
 use crate::geometry::{cot_of_angle_between, triangle_area, Vec3};
 use crate::mesh::SurfaceMesh;
+use crate::solve::{sparse_from_triplets, SolveError, SparseMatrix};
 
 /// The pair weights and vertex areas of the averaged triangulation.
 #[derive(Clone, Debug)]
@@ -98,4 +101,76 @@ pub fn vertex_normals_at(mesh: &SurfaceMesh, x: &[Vec3]) -> Vec<Vec3> {
         }
     }
     n.into_iter().map(Vec3::normalize_or_zero).collect()
+}
+
+/// The fixed sparsity pattern of a Laplacian-like matrix over a list of vertex pairs, with the value slot
+/// of every pair's four entries: rebuilding the matrix for new weights is then one pass over the pairs
+/// (no triplet sorting), and the pattern never changes (so symbolic factorisations stay valid).
+#[derive(Clone, Debug)]
+pub struct Assembly {
+    symbolic: SymbolicSparseColMat<usize>,
+    slots: Vec<[usize; 4]>,
+    diag: Vec<usize>,
+}
+
+impl Assembly {
+    /// The pattern of the pairs `(i, j, _)` plus the whole diagonal, `n × n`.
+    pub fn new(n: usize, pairs: &[(usize, usize, f64)]) -> Result<Self, SolveError> {
+        let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(2 * pairs.len() + n);
+        for &(i, j, _) in pairs {
+            t.extend([(i, j, 1.0), (j, i, 1.0)]);
+        }
+        t.extend((0..n).map(|i| (i, i, 1.0)));
+        let m = sparse_from_triplets(n, n, &t)?;
+        let cp = m.col_ptr();
+        let ri = m.row_idx();
+        let slot = |r: usize, c: usize| -> Result<usize, SolveError> {
+            let col = &ri[cp[c]..cp[c + 1]];
+            col.binary_search(&r)
+                .map(|k| cp[c] + k)
+                .map_err(|_| SolveError::IndexOutOfRange { index: r, size: n })
+        };
+        let slots = pairs
+            .iter()
+            .map(|&(i, j, _)| Ok([slot(i, j)?, slot(j, i)?, slot(i, i)?, slot(j, j)?]))
+            .collect::<Result<Vec<_>, SolveError>>()?;
+        let diag = (0..n).map(|i| slot(i, i)).collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            symbolic: m
+                .symbolic()
+                .to_owned()
+                .map_err(|_| SolveError::OutOfMemory)?,
+            slots,
+            diag,
+        })
+    }
+
+    /// `scale·(Σ_pairs w·k(i, j))` as a Laplacian (off-diagonal `scale·w·k`, diagonal minus the row sum)
+    /// plus `diag_add` on the diagonal; `w·k` clamped at 0 when `clamp`. `pairs` must be the list the
+    /// pattern was made from (same length and order).
+    pub fn build(
+        &self,
+        pairs: &[(usize, usize, f64)],
+        k: impl Fn(usize, usize) -> f64,
+        clamp: bool,
+        scale: f64,
+        diag_add: &[f64],
+    ) -> SparseMatrix {
+        let mut val = vec![0.0; self.symbolic.row_idx().len()];
+        for (&(i, j, w), s) in pairs.iter().zip(&self.slots) {
+            let mut v = w * k(i, j);
+            if clamp {
+                v = v.max(0.0);
+            }
+            let v = scale * v;
+            val[s[0]] += v;
+            val[s[1]] += v;
+            val[s[2]] -= v;
+            val[s[3]] -= v;
+        }
+        for (&d, &a) in self.diag.iter().zip(diag_add) {
+            val[d] += a;
+        }
+        SparseMatrix::new(self.symbolic.clone(), val)
+    }
 }

@@ -9,8 +9,6 @@
 //! split falls on an existing sample. A triangle gets only three new polylines, to the midpoints of its
 //! three real sides. New polylines are [`Curve`]s with `generated = true`, not sharp.
 
-use std::collections::HashMap;
-
 use super::control::{ControlMesh, Curve, CurvePoint, VertexTag};
 use super::coons::{halfedge_polyline, CoonsPatch};
 use super::error::SurfaceError;
@@ -60,11 +58,10 @@ pub fn refine_step(
 ) -> Result<ControlMesh, SurfaceError> {
     let segments = segments.max(2) & !1;
     let m = &cm.mesh;
-    let mut b = Builder::from_control(cm);
-    b.spans.clear();
+    let mut b = Builder::from_control_without_spans(cm);
     b.faces.reserve(4 * m.n_faces());
     // Edge midpoints.
-    let mut mid: HashMap<usize, usize> = HashMap::with_capacity(m.n_edges());
+    let mut mid: Vec<usize> = vec![usize::MAX; m.edges_size()];
     for e in m.edges() {
         let h = e.halfedge(0);
         let (a, z) = (m.from_vertex(h).idx(), m.to_vertex(h).idx());
@@ -87,7 +84,7 @@ pub fn refine_step(
                 b.vertex(p, VertexTag::Free)
             }
         };
-        mid.insert(e.idx(), v);
+        mid[e.idx()] = v;
     }
     for f in m.faces() {
         let hs: Vec<Halfedge> = m.face_halfedges(f).collect();
@@ -101,7 +98,7 @@ pub fn refine_step(
         let half = across / 2;
         let step = 1.0 / across as f64;
         let corner: Vec<usize> = hs.iter().map(|&h| m.from_vertex(h).idx()).collect();
-        let mids: Vec<usize> = hs.iter().map(|&h| mid[&h.edge().idx()]).collect();
+        let mids: Vec<usize> = hs.iter().map(|&h| mid[h.edge().idx()]).collect();
         let patch = match sides.len() {
             3 => {
                 let [s0, s1, s2]: [Vec<Vec3>; 3] = sides.try_into().map_err(|_| bad(f))?;

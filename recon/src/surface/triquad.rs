@@ -249,7 +249,7 @@ fn split_face(
         curve.generated = true;
         let ci = b.curves.len();
         let l = curve.length();
-        if !(l > 0.0) {
+        if l.is_nan() || l <= 0.0 {
             return Err("two corners of a cut coincide".into());
         }
         b.curves.push(curve);
