@@ -33,7 +33,7 @@
 //!   Catmull-Clark limit positions are their curve points (on the C1 cubic through the polyline's samples,
 //!   [`smooth_point_at`]), then the plain rules apply; finish with
 //!   [`limit_positions`]. The surface stays C1 across non-sharp curves and passes through the curve vertices
-//!   of every level (same sphere: 0.04°; a bumpy height-field grid 0.5°).
+//!   of every level (same sphere: 0.04°; a bumpy height-field grid 0.13°).
 //! * [`CurveKeeping::None`]: the plain rules.
 
 use super::control::{ControlMesh, CurvePoint, CurveSpan, VertexTag};

@@ -27,10 +27,15 @@
 //!   symmetric matrix. With σ = 0.2, crease, corner and smooth vertices are decoupled (`e⁻²⁵`). Negative
 //!   cotangent weights are clamped to 0 in `K_w` only (STEP 1 then has an M-matrix, SPD for any mesh);
 //!   STEP 2 keeps them (its normal matrix `CᵀC` is PSD anyway, and linear precision keeps planes planar).
-//! * **Field.** [`CurvatureField::Scalar`] (default) diffuses the signed mean curvature `δ·n` and rebuilds
-//!   `δ̃ = (δ·n)~ n` with the current normals: a constant-mean-curvature surface (a sphere) is then a fixed
-//!   point, as eq. 6.1 promises. [`CurvatureField::Vector`] diffuses `δ` componentwise as printed in
+//! * **Field.** [`CurvatureField::Scalar`] (default) diffuses the signed mean curvature `h = δ·n` and
+//!   replaces only the normal part of δ: `δ̃ = δ + (h̃ − h) n` with the current normals, so a
+//!   constant-mean-curvature surface (a sphere) is a fixed point, as eq. 6.1 promises, and the tangential
+//!   part of δ (tessellation irregularity, a boundary's in-plane curvature) is not refitted. [`CurvatureField::Vector`] diffuses `δ` componentwise as printed in
 //!   eq. 6.3; that shrinks the normal field's length on curved surfaces and flattens them slightly.
+//! * **Sharp vertices** (on a sharp curve, S ≥ 1) are "position- and curvature-constrained" (§6.4): their
+//!   δ is kept as it is (the kernel already decouples them from the smooth vertices in STEP 1); otherwise a
+//!   crease's concentrated curvature, which depends on the local mesh width, would be smoothed along it
+//!   and the refit would bend the flat sides of the crease.
 //! * **Operators per iteration.** `C`, `M`, `K_w` are rebuilt from the current positions at every outer
 //!   iteration ([`DiffusionOptions::update_operators`]); the sparsity pattern is the mesh's, so only the
 //!   numeric Cholesky factorisations are redone (the symbolic analyses are made once, in
@@ -233,11 +238,21 @@ impl SurfaceDiffusion {
                     .solve_in_place(field.as_mut())
                     .map_err(solve_err)?;
             }
+            // Sharp vertices keep their curvature (the thesis: "position- and curvature-constrained");
+            // the scalar field changes only the normal part of δ, so the tangential part (the mesh's
+            // parametrisation, a boundary's in-plane curvature) is not refitted away.
             let target: Vec<Vec3> = (0..n)
-                .map(|i| match self.opts.field {
-                    CurvatureField::Scalar => normals[i] * field[(i, 0)],
-                    CurvatureField::Vector => {
-                        Vec3::new(field[(i, 0)], field[(i, 1)], field[(i, 2)])
+                .map(|i| {
+                    if self.sharp_count[i] > 0.0 {
+                        return delta[i];
+                    }
+                    match self.opts.field {
+                        CurvatureField::Scalar => {
+                            delta[i] + normals[i] * (field[(i, 0)] - delta[i].dot(normals[i]))
+                        }
+                        CurvatureField::Vector => {
+                            Vec3::new(field[(i, 0)], field[(i, 1)], field[(i, 2)])
+                        }
                     }
                 })
                 .collect();
