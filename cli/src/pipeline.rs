@@ -61,6 +61,10 @@ pub fn true_object(reader: &RecordingReader) -> anyhow::Result<Option<TrueObject
     };
     let region = drawn_region(&scene, &boundary, &DrawnRegionOptions::default())
         .context("sampling the true drawn region")?;
+    if region.len() < 3 {
+        // A boundary cut off before it enclosed anything (a short or damaged session).
+        return Ok(None);
+    }
     Ok(Some(TrueObject {
         scene,
         region: region.iter().map(v3).collect(),

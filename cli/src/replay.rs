@@ -169,15 +169,19 @@ pub fn replay_to_dir(args: &ReplayArgs) -> anyhow::Result<Report> {
         report.tip_error_plot = Some(TipErrorPlot { path, scale });
     }
     if !args.no_surface {
-        let stage = surface_stage(
+        // The tracking's outputs are written; a surface that cannot be made is said, not fatal.
+        match surface_stage(
             &reader,
             &fires_record::StrokesFile::new(out.strokes.clone()),
             &args.out,
-        )
-        .with_context(|| format!("surface of {}", args.recording.display()))?;
-        report.surface = stage.surface;
-        report.surface_from_truth = stage.surface_from_truth;
-        report.network = Some(stage.network);
+        ) {
+            Ok(stage) => {
+                report.surface = stage.surface;
+                report.surface_from_truth = stage.surface_from_truth;
+                report.network = Some(stage.network);
+            }
+            Err(e) => eprintln!("warning: {}: no surface: {e:#}", args.recording.display()),
+        }
     }
     warn_damage(&reader, &report.damaged);
     let report = Report::Replay(Box::new(report));

@@ -48,6 +48,15 @@ struct PriorOptions {
     stale_prior_max: f64,
 }
 
+/// How long a stale prior keeps vetoing labellings, seconds (see [`DirectionPrior::prior`]).
+const STALE_PRIOR_TIMEOUT_S: f64 = 2.0;
+
+/// Weight of each new vision correction in the running mean square of the prior's error.
+const INNOVATION_WEIGHT: f64 = 0.1;
+
+/// Largest prior error the measured innovation may widen the prior to, radians (20°).
+const INNOVATION_SIGMA_MAX: f64 = 0.35;
+
 /// Direction filter, magnetometer calibration and world reference of one tracker.
 pub(super) struct DirectionPrior {
     options: PriorOptions,
@@ -58,6 +67,9 @@ pub(super) struct DirectionPrior {
     world_fit: Option<(u64, WorldFit)>,
     mag: MagCalibrator,
     last_vision_ns: Option<u64>,
+    /// Running mean square of the angle between the filter's direction and each vision axis it is
+    /// corrected with, rad² (how far off the prior really is).
+    innovation_sq: Option<f64>,
 }
 
 impl DirectionPrior {
@@ -93,6 +105,7 @@ impl DirectionPrior {
             world_fit: None,
             mag: MagCalibrator::new(config.mag_calibration),
             last_vision_ns: None,
+            innovation_sq: None,
         }
     }
 
@@ -191,6 +204,13 @@ impl DirectionPrior {
     /// world reference is known.
     pub(super) fn correct(&mut self, t: u64, direction: &Vector3<f64>, variance: Option<f64>) {
         if self.world.is_some() {
+            if let Some(d) = self.direction_at(t) {
+                let c = d.dot(direction) / (d.norm() * direction.norm()).max(1e-300);
+                let a2 = c.clamp(-1.0, 1.0).acos().powi(2);
+                self.innovation_sq = Some(self.innovation_sq.map_or(a2, |m| {
+                    (1.0 - INNOVATION_WEIGHT) * m + INNOVATION_WEIGHT * a2
+                }));
+            }
             self.filter.get_mut().vision(t, direction, variance);
         }
     }
@@ -204,13 +224,19 @@ impl DirectionPrior {
     /// configured `prior_sigma` while vision corrected it within `fused_fresh_ns`, then growing
     /// by `stale_prior_growth` per second up to `stale_prior_max`. Without it a three-LED pen
     /// that lost the track could never be relabelled (its mirror image fits the distances).
-    /// None until the world reference is known.
+    /// None until the world reference is known, and until vision has corrected the filter once: an
+    /// inertial direction never corrected carries the magnetometer's uncalibrated heading error, which
+    /// can exceed any stale bound, and a prior that refused every labelling would never be corrected.
     pub(super) fn prior(&self, t: u64) -> Option<(Vector3<f64>, f64)> {
         let d = self.direction_at(t)?;
         let base = self.options.prior_sigma;
-        let age = self
-            .last_vision_ns
-            .map_or(u64::MAX, |tv| t.saturating_sub(tv));
+        let age = t.saturating_sub(self.last_vision_ns?);
+        // The filter's own recent error against vision (e.g. an uncalibrated magnetometer pulling its
+        // heading between frames) widens the prior: a bound tighter than the error it has shown would
+        // refuse the very frames that correct it.
+        let base = self
+            .innovation_sq
+            .map_or(base, |m| base.max(2.0 * m.sqrt()).min(INNOVATION_SIGMA_MAX));
         if age <= self.options.fused_fresh_ns {
             return Some((d, base));
         }
@@ -218,6 +244,13 @@ impl DirectionPrior {
             return None;
         }
         let stale_s = (age - self.options.fused_fresh_ns) as f64 * 1e-9;
+        if stale_s > STALE_PRIOR_TIMEOUT_S {
+            // Refused this long, the inertial direction may have drifted beyond any bound (the
+            // magnetometer's heading before its hard iron is calibrated); identification falls
+            // back to the geometry alone, which refuses what it cannot tell apart, until vision
+            // corrects the filter again. Otherwise a wrong prior would refuse vision for ever.
+            return None;
+        }
         let sigma =
             (base + self.options.stale_prior_growth * stale_s).min(self.options.stale_prior_max);
         Some((d, sigma.max(base)))
@@ -286,7 +319,8 @@ mod tests {
     }
 
     /// Fresh: the configured sigma; then it grows at `stale_prior_growth` up to
-    /// `stale_prior_max`; without a stale prior there is none once vision is old.
+    /// `stale_prior_max`, and there is none after the stale timeout or before the first vision;
+    /// without a stale prior there is none once vision is old.
     #[test]
     fn the_prior_loosens_as_vision_ages() {
         let cfg = known_world();
@@ -294,8 +328,8 @@ mod tests {
         assert!(p.prior(0).is_none(), "no filter state yet");
         p.imu(&imu(1_000_000));
         let base = cfg.identify.prior_sigma;
-        // Never corrected by vision: the largest stale error.
-        assert_eq!(p.prior(2_000_000).unwrap().1, cfg.stale_prior_max);
+        // Never corrected by vision: no prior (its heading error is unbounded).
+        assert!(p.prior(2_000_000).is_none());
         assert!(p.fused(2_000_000).is_none());
         p.mark_vision(10_000_000);
         let fresh_end = 10_000_000 + cfg.fused_fresh_ns;
@@ -306,9 +340,13 @@ mod tests {
         let sigma = p.prior(later).unwrap().1;
         assert!((sigma - (base + cfg.stale_prior_growth * 0.2)).abs() < 1e-15);
         assert_eq!(
-            p.prior(later + 10_000_000_000).unwrap().1,
+            p.prior(fresh_end + 1_900_000_000).unwrap().1,
             cfg.stale_prior_max
         );
+        // Stale beyond the timeout: none, until vision corrects the filter again.
+        assert!(p.prior(fresh_end + 2_100_000_000).is_none());
+        p.mark_vision(fresh_end + 3_000_000_000);
+        assert_eq!(p.prior(fresh_end + 3_000_000_000).unwrap().1, base);
         let mut none = DirectionPrior::new(&TrackerConfig {
             stale_prior_max: 0.0,
             ..known_world()
