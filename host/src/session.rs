@@ -12,7 +12,7 @@ use crate::stroke::{
     StrokeRecordConfig, StrokeSegmenter,
 };
 use crate::track::fusion::ImuSample;
-use crate::track::pipeline::{CameraFrame, TrackSample, Tracker};
+use crate::track::pipeline::{CameraFrame, TrackQuality, TrackSample, Tracker};
 use fires_record::Stroke;
 
 /// The filter behind the live display of the tip.
@@ -190,7 +190,15 @@ impl Session {
     }
 
     fn sample(&mut self, s: TrackSample) -> SessionSample {
-        self.segmenter.tip(s.t_ns, s.tip);
+        // Strokes keep what the cameras saw: a dead-reckoned tip drifts by centimetres within a
+        // fraction of a second on a webcam rig, so it is shown live but never drawn into a stroke;
+        // a gap between vision tips becomes a split into pieces (docs/strokes.md).
+        if matches!(s.quality, TrackQuality::Vision { .. }) {
+            // The frame's own eq. 4.13 tip (its uncertainty is `tip_sigma_m`); the end-of-stroke
+            // spline smooths it over the stroke.
+            self.segmenter
+                .tip_with_sigma(s.t_ns, s.raw_tip.or(s.tip), s.tip_sigma_m);
+        }
         let display_tip = s.tip.map(|p| self.smoother.push(s.t_ns, p));
         SessionSample {
             track: s,

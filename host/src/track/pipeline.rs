@@ -110,6 +110,10 @@ pub struct TrackSample {
     pub confidence: f64,
     /// Number of interference points rejected.
     pub interference: usize,
+    /// Expected per-axis noise (one sigma) of `raw_tip`, metres: the labelled LEDs' triangulation
+    /// covariances through eq. 4.13 (vision samples only; None when unknown).
+    #[serde(default)]
+    pub tip_sigma_m: Option<f64>,
 }
 
 impl TrackSample {
@@ -124,6 +128,7 @@ impl TrackSample {
             quality: TrackQuality::Lost,
             confidence: 0.0,
             interference: 0,
+            tip_sigma_m: None,
         }
     }
 }
@@ -399,6 +404,7 @@ impl Tracker {
             },
             confidence: id.confidence,
             interference: id.interference,
+            tip_sigma_m: sigma,
         }
     }
 
