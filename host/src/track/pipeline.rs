@@ -280,8 +280,9 @@ impl Tracker {
             .align
             .current(1 - this)
             .map_or(0, |f| f.t_ns.abs_diff(t));
-        let scale_error_max = 1.0
-            + self.config.max_pen_speed_mps * pair_dt as f64 * 1e-9 / self.rig.baseline().max(1e-6);
+        // Speed-bounded twin test: the pen's measured speed, not the fastest conceivable one.
+        let speed = self.config.twin_speed_bound(self.labels.recent_speed(t));
+        let scale_error_max = 1.0 + speed * pair_dt as f64 * 1e-9 / self.rig.baseline().max(1e-6);
         let prior = IdentifyPrior {
             direction,
             direction_sigma,
