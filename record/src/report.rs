@@ -211,6 +211,9 @@ pub struct VisionRefusals {
     /// The pairs in which both cameras truly see at least three LEDs (with ground truth).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub truly_visible: Option<PairRefusals>,
+    /// The truly visible pairs whose left exposure falls inside a true stroke (with stroke truth).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub truly_visible_in_strokes: Option<PairRefusals>,
 }
 
 /// A set of stereo pairs: how many gave a vision tip, and what each refusal reason cost.

@@ -127,3 +127,25 @@ fn a_stress_session_never_accepts_a_wrong_label() {
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
+
+/// The speed-bounded twin test (the twin scale bound from the measured pen speed, not 1.5 m/s)
+/// accepts no wrong label over many seeds of the scenarios with three-LED twins in view. Long: run
+/// with `cargo test -p fires-e2e --release --test replay_sim -- --ignored`.
+#[test]
+#[ignore]
+fn the_speed_bounded_twin_test_accepts_no_wrong_label_over_many_seeds() {
+    let runs = (1..=20)
+        .map(|s| ("stress", s, 10.0))
+        .chain((1..=5).map(|s| ("fires-v2", s, 20.0)))
+        .chain((1..=5).map(|s| ("fires-v1", s, 20.0)));
+    for (name, seed, seconds) in runs {
+        let dir = simulate(name, seconds, seed);
+        let reader = RecordingReader::open(&dir).expect("open");
+        let out = replay(&reader, &ReplayConfig::default()).expect("replay");
+        let truth = reader.exposure_truth().expect("truth").expect("simulated");
+        let acc = accuracy(&out, &truth);
+        assert!(acc.labels_checked > 0, "{name} seed {seed}: {acc:?}");
+        assert_eq!(acc.mislabels, 0, "{name} seed {seed}: {acc:?}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

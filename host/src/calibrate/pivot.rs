@@ -223,6 +223,7 @@ mod tests {
             quality,
             confidence: 1.0,
             interference: 0,
+            tip_sigma_m: None,
         };
         let samples = [
             sample([None, at(1), None, at(3)], TrackQuality::Vision { leds: 2 }),

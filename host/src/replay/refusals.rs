@@ -54,31 +54,51 @@ pub fn pair_refusals<'a>(pairs: impl IntoIterator<Item = &'a PairOutcome>) -> Pa
 }
 
 /// The `vision_refusals` block; with exposure truth also over the truly visible pairs (both frames
-/// with at least three LEDs `visible`).
-pub fn vision_refusals(out: &ReplayOutput, truth: Option<&[ExposureTruth]>) -> VisionRefusals {
-    let truly_visible = truth.map(|truth| {
-        let visible: HashMap<(u8, u64), usize> = truth
-            .iter()
-            .map(|e| {
-                let n = e
-                    .leds
-                    .iter()
-                    .filter(|l| l.visibility == Visibility::Visible && l.pixel.is_some())
-                    .count();
-                ((e.camera, e.index), n)
-            })
-            .collect();
-        let seen = |cam: u8, i: u64| visible.get(&(cam, i)).is_some_and(|&n| n >= 3);
-        pair_refusals(
-            out.pairs
+/// with at least three LEDs `visible`), and with the true strokes' `[start, end]` times (ns) over
+/// the truly visible pairs whose left exposure lies in a stroke.
+pub fn vision_refusals(
+    out: &ReplayOutput,
+    truth: Option<&[ExposureTruth]>,
+    strokes: Option<&[(u64, u64)]>,
+) -> VisionRefusals {
+    let Some(truth) = truth else {
+        return VisionRefusals {
+            unpaired_frames: out.unpaired_frames,
+            all: pair_refusals(&out.pairs),
+            truly_visible: None,
+            truly_visible_in_strokes: None,
+        };
+    };
+    // (visible LEDs, exposure time) per (camera, frame index).
+    let frames: HashMap<(u8, u64), (usize, u64)> = truth
+        .iter()
+        .map(|e| {
+            let n = e
+                .leds
                 .iter()
-                .filter(|p| seen(0, p.left_frame) && seen(1, p.right_frame)),
-        )
+                .filter(|l| l.visibility == Visibility::Visible && l.pixel.is_some())
+                .count();
+            ((e.camera, e.index), (n, e.exposure_time_ns))
+        })
+        .collect();
+    let seen = |cam: u8, i: u64| frames.get(&(cam, i)).is_some_and(|&(n, _)| n >= 3);
+    let visible: Vec<&PairOutcome> = out
+        .pairs
+        .iter()
+        .filter(|p| seen(0, p.left_frame) && seen(1, p.right_frame))
+        .collect();
+    let in_strokes = strokes.map(|strokes| {
+        pair_refusals(visible.iter().copied().filter(|p| {
+            frames
+                .get(&(0, p.left_frame))
+                .is_some_and(|&(_, t)| strokes.iter().any(|&(a, b)| a <= t && t <= b))
+        }))
     });
     VisionRefusals {
         unpaired_frames: out.unpaired_frames,
         all: pair_refusals(&out.pairs),
-        truly_visible,
+        truly_visible: Some(pair_refusals(visible.iter().copied())),
+        truly_visible_in_strokes: in_strokes,
     }
 }
 

@@ -241,9 +241,13 @@ pub fn replay_report(
         surface_from_truth: None,
         network: None,
     };
+    let stroke_times: Option<Vec<(u64, u64)>> = reader
+        .strokes()?
+        .map(|s| s.iter().map(|s| (s.start_time_ns, s.end_time_ns)).collect());
     report.vision_refusals = Some(super::refusals::vision_refusals(
         out,
         exposure_truth.as_deref(),
+        stroke_times.as_deref(),
     ));
     let tip_truth = tip_truth(reader)?;
     let display: Vec<(u64, [f64; 3])> = out

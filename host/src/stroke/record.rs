@@ -4,7 +4,7 @@
 
 use fires_record::{StrokePiece, StrokePoint};
 
-use super::{postprocess, PostprocessConfig, Stroke};
+use super::{postprocess, PostprocessConfig, Stroke, TimedPoint};
 
 /// How a finished stroke becomes a record of the strokes file.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -15,6 +15,10 @@ pub struct StrokeRecordConfig {
     pub close_distance_m: f64,
     /// ... and only if it is at least this many closing distances long (a dab is not a loop).
     pub min_closed_length: f64,
+    /// Largest error allowed where the polyline bridges a gap between two tracked tips, metres.
+    pub max_bridge_error_m: f64,
+    /// Acceleration of a drawing hand the bridge must allow for, m/s^2.
+    pub drawing_accel_mps2: f64,
 }
 
 impl Default for StrokeRecordConfig {
@@ -25,31 +29,64 @@ impl Default for StrokeRecordConfig {
             postprocess: PostprocessConfig::default(),
             close_distance_m: 0.010,
             min_closed_length: 4.0,
+            // A gap is bridged only where the bridge stays within 1 mm of the pen (issue: strokes
+            // that follow the pen) for a hand accelerating at 1 m/s^2 (drawing strokes of a few
+            // centimetres in half a second).
+            max_bridge_error_m: 0.001,
+            drawing_accel_mps2: 1.0,
         }
     }
 }
 
-/// The strokes-file record of `stroke`, with its stable `id` and the `buttons` held at pen-down. Each output
-/// point gets the time at which the tip passed the same fraction of the raw path's arc length.
+impl StrokeRecordConfig {
+    /// The longest gap between two tracked tips that the polyline bridges, nanoseconds: a path
+    /// with acceleration `a` leaves its chord by at most `a dt^2 / 8` over a gap `dt`, so the gap
+    /// limit is `sqrt(8 e / a)` for the bridge error `e`.
+    pub fn max_gap_ns(&self) -> u64 {
+        let a = self.drawing_accel_mps2.max(1e-9);
+        let dt = (8.0 * self.max_bridge_error_m.max(0.0) / a).sqrt();
+        (dt * 1e9).min(u64::MAX as f64) as u64
+    }
+}
+
+/// The strokes-file record of `stroke`, with its stable `id` and the `buttons` held at pen-down. The raw
+/// samples are split into pieces where two consecutive ones are more than
+/// [`StrokeRecordConfig::max_gap_ns`] apart; each piece is post-processed on its own. Each output
+/// point gets the time at which the tip passed the same fraction of its piece's raw arc length, and
+/// the uncertainty of the raw sample nearest that time.
 pub fn stroke_record(
     id: u32,
     buttons: u8,
     stroke: &Stroke,
     config: &StrokeRecordConfig,
 ) -> fires_record::Stroke {
-    let raw: Vec<[f64; 3]> = stroke.points.iter().map(|p| p.p).collect();
-    let polyline = postprocess(&raw, &config.postprocess).unwrap_or_else(|_| raw.clone());
-    let times = arc_length_times(stroke, &polyline);
-    let points = polyline
+    let max_gap = config.max_gap_ns();
+    let mut pieces = Vec::new();
+    let mut start = 0;
+    for i in 1..=stroke.points.len() {
+        let split = i == stroke.points.len()
+            || stroke.points[i]
+                .t_ns
+                .saturating_sub(stroke.points[i - 1].t_ns)
+                > max_gap;
+        if split && i > start {
+            pieces.push(piece(&stroke.points[start..i], stroke.t_start_ns, config));
+            start = i;
+        }
+    }
+    let polyline: Vec<[f64; 3]> = pieces
         .iter()
-        .zip(times)
-        .map(|(&p_m, t_ns)| StrokePoint {
-            t_ns,
-            p_m,
-            sigma_mm: None,
-        })
+        .flat_map(|p: &StrokePiece| p.points.iter().map(|q| q.p_m))
         .collect();
-    let length: f64 = polyline.windows(2).map(|w| dist(&w[0], &w[1])).sum();
+    let length: f64 = pieces
+        .iter()
+        .map(|p| {
+            p.points
+                .windows(2)
+                .map(|w| dist(&w[0].p_m, &w[1].p_m))
+                .sum::<f64>()
+        })
+        .sum();
     let closed = match (polyline.first(), polyline.last()) {
         (Some(a), Some(b)) => {
             dist(a, b) <= config.close_distance_m
@@ -63,9 +100,41 @@ pub fn stroke_record(
         t_end_ns: stroke.t_end_ns,
         buttons,
         closed,
-        raw_points: raw.len(),
-        pieces: vec![StrokePiece { points }],
+        raw_points: stroke.points.len(),
+        pieces,
     }
+}
+
+/// One piece: the post-processed polyline of raw samples tracked without a gap.
+fn piece(raw: &[TimedPoint], t_start_ns: u64, config: &StrokeRecordConfig) -> StrokePiece {
+    let pts: Vec<[f64; 3]> = raw.iter().map(|p| p.p).collect();
+    let polyline = if pts.len() >= 2 {
+        postprocess(&pts, &config.postprocess).unwrap_or_else(|_| pts.clone())
+    } else {
+        pts.clone()
+    };
+    let times = arc_length_times(raw, t_start_ns, &polyline);
+    let points = polyline
+        .iter()
+        .zip(times)
+        .map(|(&p_m, t_ns)| StrokePoint {
+            t_ns,
+            p_m,
+            sigma_mm: sigma_at(raw, t_ns).map(|s| s * 1e3),
+        })
+        .collect();
+    StrokePiece { points }
+}
+
+/// The uncertainty of the raw sample nearest `t_ns`.
+fn sigma_at(raw: &[TimedPoint], t_ns: u64) -> Option<f64> {
+    let i = raw.partition_point(|p| p.t_ns < t_ns);
+    let near = [i.checked_sub(1), Some(i)]
+        .into_iter()
+        .flatten()
+        .filter_map(|k| raw.get(k))
+        .min_by_key(|p| p.t_ns.abs_diff(t_ns))?;
+    near.sigma_m
 }
 
 fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
@@ -91,16 +160,16 @@ fn normalised_arc_length(points: impl Iterator<Item = [f64; 3]>) -> Vec<f64> {
 }
 
 /// The time of each output point: the raw samples' time, interpolated at the same normalised arc length.
-fn arc_length_times(stroke: &Stroke, polyline: &[[f64; 3]]) -> Vec<u64> {
-    let raw_s = normalised_arc_length(stroke.points.iter().map(|p| p.p));
+fn arc_length_times(raw: &[TimedPoint], t_start_ns: u64, polyline: &[[f64; 3]]) -> Vec<u64> {
+    let raw_s = normalised_arc_length(raw.iter().map(|p| p.p));
     let out_s = normalised_arc_length(polyline.iter().copied());
-    let raw_t: Vec<u64> = stroke.points.iter().map(|p| p.t_ns).collect();
+    let raw_t: Vec<u64> = raw.iter().map(|p| p.t_ns).collect();
     out_s
         .iter()
         .map(|&s| {
             let i = raw_s.partition_point(|&r| r < s);
             match (i.checked_sub(1), raw_t.get(i)) {
-                (_, None) => raw_t.last().copied().unwrap_or(stroke.t_start_ns),
+                (_, None) => raw_t.last().copied().unwrap_or(t_start_ns),
                 (None, Some(&t)) => t,
                 (Some(j), Some(&t1)) => {
                     let (s0, s1, t0) = (raw_s[j], raw_s[i], raw_t[j]);
@@ -130,6 +199,7 @@ mod tests {
                 TimedPoint {
                     t_ns: 1_000_000_000 + (a * 2e9) as u64,
                     p,
+                    sigma_m: Some(0.5e-3),
                 }
             })
             .collect();
@@ -169,5 +239,33 @@ mod tests {
         let mut dab = line_stroke(50, false);
         dab.points.iter_mut().for_each(|p| p.p[0] *= 0.02);
         assert!(!stroke_record(0, 1, &dab, &cfg).closed);
+    }
+
+    #[test]
+    fn a_gap_too_long_to_bridge_splits_the_stroke_into_pieces_of_one_id() {
+        let cfg = StrokeRecordConfig::default();
+        // sqrt(8 * 1 mm / 1 m/s^2) = 89.4 ms.
+        assert_eq!(cfg.max_gap_ns() / 1_000_000, 89);
+        let mut stroke = line_stroke(201, false);
+        // Drop the samples of 0.4 s in the middle (a 0.41 s gap): two pieces.
+        stroke
+            .points
+            .retain(|p| !(1_800_000_000..2_200_000_000).contains(&p.t_ns));
+        let r = stroke_record(3, 1, &stroke, &cfg);
+        assert_eq!((r.id, r.pieces.len()), (3, 2));
+        let (a, b) = (&r.pieces[0].points, &r.pieces[1].points);
+        let end_a = a.last().unwrap().p_m[0];
+        let start_b = b.first().unwrap().p_m[0];
+        // Nothing is drawn across the gap (x from 0.04 to 0.06 m).
+        assert!(end_a < 0.0401 && start_b > 0.0599, "{end_a} {start_b}");
+        assert!(r
+            .points()
+            .all(|p| p.sigma_mm.is_some_and(|s| (s - 0.5).abs() < 1e-12)));
+        // A gap within the limit (50 ms) is bridged.
+        let mut short = line_stroke(201, false);
+        short
+            .points
+            .retain(|p| !(1_980_000_000..2_020_000_000).contains(&p.t_ns));
+        assert_eq!(stroke_record(3, 1, &short, &cfg).pieces.len(), 1);
     }
 }

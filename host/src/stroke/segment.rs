@@ -10,6 +10,9 @@ pub struct TimedPoint {
     pub t_ns: u64,
     /// Tip position, metres.
     pub p: [f64; 3],
+    /// One-sigma per-axis uncertainty of `p`, metres (None when the tracker gave none).
+    #[serde(default)]
+    pub sigma_m: Option<f64>,
 }
 
 /// A finished stroke.
@@ -93,10 +96,16 @@ impl StrokeSegmenter {
 
     /// A tracker sample; kept if a stroke is open and the sample is not before its start.
     pub fn tip(&mut self, t_ns: u64, tip: Option<[f64; 3]>) {
+        self.tip_with_sigma(t_ns, tip, None);
+    }
+
+    /// [`Self::tip`] with the tip's one-sigma per-axis uncertainty, metres.
+    pub fn tip_with_sigma(&mut self, t_ns: u64, tip: Option<[f64; 3]>, sigma_m: Option<f64>) {
         if let (Some(stroke), Some(p)) = (self.current.as_mut(), tip) {
             let in_order = stroke.points.last().is_none_or(|l| l.t_ns < t_ns);
             if t_ns >= stroke.t_start_ns && in_order && p.iter().all(|v| v.is_finite()) {
-                stroke.points.push(TimedPoint { t_ns, p });
+                let sigma_m = sigma_m.filter(|s| s.is_finite() && *s >= 0.0);
+                stroke.points.push(TimedPoint { t_ns, p, sigma_m });
             }
         }
     }

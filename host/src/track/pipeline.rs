@@ -110,6 +110,10 @@ pub struct TrackSample {
     pub confidence: f64,
     /// Number of interference points rejected.
     pub interference: usize,
+    /// Expected per-axis noise (one sigma) of `raw_tip`, metres: the labelled LEDs' triangulation
+    /// covariances through eq. 4.13 (vision samples only; None when unknown).
+    #[serde(default)]
+    pub tip_sigma_m: Option<f64>,
 }
 
 impl TrackSample {
@@ -124,6 +128,7 @@ impl TrackSample {
             quality: TrackQuality::Lost,
             confidence: 0.0,
             interference: 0,
+            tip_sigma_m: None,
         }
     }
 }
@@ -275,8 +280,9 @@ impl Tracker {
             .align
             .current(1 - this)
             .map_or(0, |f| f.t_ns.abs_diff(t));
-        let scale_error_max = 1.0
-            + self.config.max_pen_speed_mps * pair_dt as f64 * 1e-9 / self.rig.baseline().max(1e-6);
+        // Speed-bounded twin test: the pen's measured speed, not the fastest conceivable one.
+        let speed = self.config.twin_speed_bound(self.labels.recent_speed(t));
+        let scale_error_max = 1.0 + speed * pair_dt as f64 * 1e-9 / self.rig.baseline().max(1e-6);
         let prior = IdentifyPrior {
             direction,
             direction_sigma,
@@ -399,6 +405,7 @@ impl Tracker {
             },
             confidence: id.confidence,
             interference: id.interference,
+            tip_sigma_m: sigma,
         }
     }
 

@@ -69,6 +69,14 @@ pub struct TrackerConfig {
     /// exposures it bounds the triangulation's scale error (`1 + v Δt / baseline`), which decides
     /// whether two three-LED patterns that differ only in scale can be confused.
     pub max_pen_speed_mps: f64,
+    /// With a measured pen speed `v` (the fastest LED between the last two labelled frames), the
+    /// scale-error bound uses `min(max_pen_speed_mps, measured_speed_factor v +
+    /// measured_speed_floor_mps)` instead (speed-bounded twin test): the factor allows the pen to
+    /// speed up between frames...
+    pub measured_speed_factor: f64,
+    /// ...and the floor the speed's noise (two frames' depth noise over a frame period) plus a
+    /// hand accelerating at 3 m/s^2 for `continuity_ns`, metres per second.
+    pub measured_speed_floor_mps: f64,
     /// Labelled frames per clock-offset update.
     pub clock_window: usize,
     /// Required precision of one clock-offset update, nanoseconds (else the window is discarded).
@@ -86,6 +94,19 @@ pub struct TrackerConfig {
     /// ...up to this error, radians (the IMU-only orientation's error bound with a calibrated
     /// world reference); a value of 0 disables the stale prior.
     pub stale_prior_max: f64,
+}
+
+impl TrackerConfig {
+    /// The pen speed that bounds a pair's scale error: `max_pen_speed_mps`, or with a `measured`
+    /// speed (m/s) `measured_speed_factor measured + measured_speed_floor_mps` when smaller.
+    pub fn twin_speed_bound(&self, measured: Option<f64>) -> f64 {
+        measured
+            .filter(|v| v.is_finite() && *v >= 0.0)
+            .map_or(self.max_pen_speed_mps, |v| {
+                (self.measured_speed_factor * v + self.measured_speed_floor_mps)
+                    .min(self.max_pen_speed_mps)
+            })
+    }
 }
 
 impl Default for TrackerConfig {
@@ -110,6 +131,8 @@ impl Default for TrackerConfig {
             time_align: true,
             min_image_separation_px: 4.0,
             max_pen_speed_mps: 1.5,
+            measured_speed_factor: 2.0,
+            measured_speed_floor_mps: 0.3,
             estimate_clock_offset: true,
             clock_window: 30,
             clock_precision_ns: 1_000_000.0,
@@ -119,5 +142,20 @@ impl Default for TrackerConfig {
             stale_prior_growth: 0.05,
             stale_prior_max: 0.07,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_twin_speed_bound_follows_the_measured_speed_up_to_the_maximum() {
+        let c = TrackerConfig::default();
+        assert_eq!(c.twin_speed_bound(None), c.max_pen_speed_mps);
+        assert_eq!(c.twin_speed_bound(Some(f64::NAN)), c.max_pen_speed_mps);
+        assert!((c.twin_speed_bound(Some(0.0)) - c.measured_speed_floor_mps).abs() < 1e-15);
+        assert!((c.twin_speed_bound(Some(0.2)) - 0.7).abs() < 1e-12);
+        assert_eq!(c.twin_speed_bound(Some(5.0)), c.max_pen_speed_mps);
     }
 }

@@ -46,6 +46,9 @@ pub(super) struct LabelGuard {
     continuity_ns: u64,
     /// Time and positions of the LEDs labelled last.
     previous_leds: (u64, [Option<Vector3<f64>>; LED_COUNT]),
+    /// Time of the last labelled frame and the fastest LED speed since the one before (m/s),
+    /// when both were within `continuity_ns` and shared an LED.
+    measured_speed: Option<(u64, f64)>,
 }
 
 impl LabelGuard {
@@ -56,7 +59,15 @@ impl LabelGuard {
             min_image_separation_px: config.min_image_separation_px,
             continuity_ns: config.continuity_ns,
             previous_leds: (0, [None; LED_COUNT]),
+            measured_speed: None,
         }
+    }
+
+    /// The fastest LED speed the last two labelled frames measured (m/s), if the last one is
+    /// within `continuity_ns` of `t`.
+    pub(super) fn recent_speed(&self, t: u64) -> Option<f64> {
+        let (t_prev, v) = self.measured_speed?;
+        (t.saturating_sub(t_prev) <= self.continuity_ns).then_some(v)
     }
 
     /// The LEDs labelled last, if within `continuity_ns` of `t`.
@@ -189,6 +200,17 @@ impl LabelGuard {
         id: &Identification,
         estimate: &TipEstimate,
     ) {
+        let (t0, prev) = self.previous_leds;
+        self.measured_speed = (t > t0 && t - t0 <= self.continuity_ns)
+            .then(|| {
+                let dt = (t - t0) as f64 * 1e-9;
+                prev.iter()
+                    .zip(&id.points)
+                    .filter_map(|(a, b)| Some((b.as_ref()? - a.as_ref()?).norm() / dt))
+                    .reduce(f64::max)
+            })
+            .flatten()
+            .map(|v| (t, v));
         self.previous_leds = (t, id.points);
         if let Some(c) = tip.pattern_centroid(estimate.pattern) {
             let l = self.led_offsets;
