@@ -95,11 +95,23 @@ fn summary_lines(r: &fires_record::ReplayReport, out: &std::path::Path) -> Vec<S
         )
     };
     match &r.surface {
-        Some(s) => lines.push(surface("surface (FIRESV2) from the tracked strokes", s)),
+        Some(s) => lines.push(surface(
+            &format!(
+                "surface (FIRES{}) from the tracked strokes",
+                s.method.to_uppercase()
+            ),
+            s,
+        )),
         None => lines.push("no surface: the tracked strokes make no closed network face".into()),
     }
     if let Some(s) = &r.surface_from_truth {
-        lines.push(surface("the same from the true strokes", s));
+        lines.push(surface(
+            &format!(
+                "the same (FIRES{}) from the true strokes",
+                s.method.to_uppercase()
+            ),
+            s,
+        ));
     }
     lines.push(format!(
         "files in {}: strokes.json, network.json, surface.obj (+ .curves.obj), report.json; pictures surface.png, surface_error.png, surface_truth_error.png, strokes_on_truth.png, tip_error.png",

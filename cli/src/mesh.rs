@@ -62,7 +62,8 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<()> {
                 mesh,
                 ..Default::default()
             };
-            let mut report = crate::pipeline::surface_report(&surface, &object)?;
+            let mut report =
+                crate::pipeline::surface_report(&surface, crate::recon::Method::V2, &object)?;
             report.method = method.clone();
             println!("{}", serde_json::to_string(&report)?);
         }

@@ -73,19 +73,32 @@ pub fn true_object(reader: &RecordingReader) -> anyhow::Result<Option<TrueObject
 }
 
 /// The network of `strokes` (the builder's rules) and its surface, when the network has a face.
-fn network_and_surface(
-    strokes: &[StrokeInput],
-) -> anyhow::Result<(Network, usize, Option<ControlMesh>)> {
+/// A network, the number of strokes it used, and its surface with the method that made it.
+type Built = (Network, usize, Option<(ControlMesh, Method)>);
+
+fn network_and_surface(strokes: &[StrokeInput]) -> anyhow::Result<Built> {
     let (net, report) = build_network(strokes, &BuildOptions::default());
     if net.n_faces() == 0 {
         return Ok((net, report.used.len(), None));
     }
-    let surface = reconstruct(&net, Method::V2, None)?;
+    // FIRESV2 by default; where its flow cannot be solved (degenerate faces from noisy strokes), FIRESV1,
+    // which needs no solve, and the report names the method used.
+    let surface = match reconstruct(&net, Method::V2, None) {
+        Ok(s) => (s, Method::V2),
+        Err(e) => {
+            eprintln!("warning: FIRESV2 failed ({e:#}); the surface is FIRESV1's");
+            (reconstruct(&net, Method::V1, None)?, Method::V1)
+        }
+    };
     Ok((net, report.used.len(), Some(surface)))
 }
 
 /// The surface against the true object.
-pub fn surface_report(surface: &ControlMesh, truth: &TrueObject) -> anyhow::Result<SurfaceReport> {
+pub fn surface_report(
+    surface: &ControlMesh,
+    method: Method,
+    truth: &TrueObject,
+) -> anyhow::Result<SurfaceReport> {
     let curves: Vec<Vec3> = surface
         .curves
         .iter()
@@ -101,7 +114,7 @@ pub fn surface_report(surface: &ControlMesh, truth: &TrueObject) -> anyhow::Resu
         &CompareOptions::default(),
     )?;
     Ok(SurfaceReport {
-        method: "v2".into(),
+        method: method.name().into(),
         vertices: surface.mesh.n_vertices(),
         rms_mm: c.rms_mm,
         p95_mm: c.p95_mm,
@@ -138,7 +151,7 @@ pub fn surface_stage(
             strokes: tracked.len(),
         },
     };
-    if let Some(surface) = &surface {
+    if let Some((surface, _)) = &surface {
         let path = out.join("surface.obj");
         files.push(write_surface(surface, &path)?);
         files.push(path);
@@ -172,8 +185,8 @@ pub fn surface_stage(
         save_png(&two_views(&scene, view), &png)
             .with_context(|| format!("cannot write {}", png.display()))?;
         files.push(png);
-        if let Some(surface) = &surface {
-            outputs.surface = Some(surface_report(surface, truth)?);
+        if let Some((surface, method)) = &surface {
+            outputs.surface = Some(surface_report(surface, *method, truth)?);
             let png = out.join("surface_error.png");
             save_png(&two_views(&error_scene(surface, truth), view), &png)
                 .with_context(|| format!("cannot write {}", png.display()))?;
@@ -184,8 +197,8 @@ pub fn surface_stage(
         std::fs::write(&path, NetworkFile::to_json(&tnet) + "\n")
             .with_context(|| format!("cannot write {}", path.display()))?;
         files.push(path);
-        if let Some(ts) = &tsurface {
-            outputs.surface_from_truth = Some(surface_report(ts, truth)?);
+        if let Some((ts, method)) = &tsurface {
+            outputs.surface_from_truth = Some(surface_report(ts, *method, truth)?);
             let path = out.join("surface_truth.obj");
             files.push(write_surface(ts, &path)?);
             files.push(path);

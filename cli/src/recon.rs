@@ -27,6 +27,16 @@ pub enum Method {
     V2,
 }
 
+impl Method {
+    /// The method's name in reports (`v1`, `v2`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::V1 => "v1",
+            Method::V2 => "v2",
+        }
+    }
+}
+
 /// Arguments of `fires recon`.
 #[derive(Debug, clap::Args)]
 pub struct ReconArgs {
@@ -172,12 +182,7 @@ pub fn compare_with_recording(
             rec.display()
         )
     })?;
-    let mut report = crate::pipeline::surface_report(surface, &truth)?;
-    report.method = match method {
-        Method::V1 => "v1".into(),
-        Method::V2 => "v2".into(),
-    };
-    Ok(report)
+    crate::pipeline::surface_report(surface, method, &truth)
 }
 
 /// Writes the mesh to `out` and its curves as OBJ lines to `out` with the extension `.curves.obj`.

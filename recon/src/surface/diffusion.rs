@@ -197,6 +197,10 @@ impl SurfaceDiffusion {
     pub fn run(&mut self) -> Result<ControlMesh, SurfaceError> {
         let n = self.x0.len();
         let mut x = self.x0.clone();
+        // The flow moves a vertex by a fraction of the surface's size; a solve that moves one by more
+        // than the whole input's extent has met an ill-conditioned operator (degenerate faces, e.g. from
+        // a noisy stroke folding back on itself) and is refused rather than returned.
+        let extent = bounding_diagonal(&self.x0);
         let mut c = self.cmat.clone();
         for it in 0..self.opts.outer_iterations {
             if it > 0 && self.opts.update_operators {
@@ -282,6 +286,17 @@ impl SurfaceDiffusion {
                     "surface diffusion diverged (non-finite positions)".into(),
                 ));
             }
+            let moved = x
+                .iter()
+                .zip(&self.x0)
+                .map(|(p, q)| (*p - *q).norm())
+                .fold(0.0, f64::max);
+            if moved > extent {
+                return Err(SurfaceError::Degenerate(format!(
+                    "surface diffusion diverged (a vertex moved {moved:.3e} m, more than the input's \
+                     {extent:.3e} m extent)"
+                )));
+            }
         }
         let mut out = self.c.clone();
         for (q, p) in out.mesh.positions_mut().iter_mut().zip(&x) {
@@ -289,6 +304,18 @@ impl SurfaceDiffusion {
         }
         Ok(out)
     }
+}
+
+/// Diagonal of the bounding box of `points`.
+fn bounding_diagonal(points: &[Vec3]) -> f64 {
+    let inf = Vec3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
+    let (lo, hi) = points.iter().fold((inf, -inf), |(lo, hi), p| {
+        (
+            Vec3::new(lo.x.min(p.x), lo.y.min(p.y), lo.z.min(p.z)),
+            Vec3::new(hi.x.max(p.x), hi.y.max(p.y), hi.z.max(p.z)),
+        )
+    });
+    (hi - lo).norm()
 }
 
 /// `(STEP 1 matrix M + τh̄²K_w, STEP 2 normal matrix, C)` at the current operators.

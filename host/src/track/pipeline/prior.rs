@@ -49,13 +49,7 @@ struct PriorOptions {
 }
 
 /// How long a stale prior keeps vetoing labellings, seconds (see [`DirectionPrior::prior`]).
-const STALE_PRIOR_TIMEOUT_S: f64 = 2.0;
-
-/// Weight of each new vision correction in the running mean square of the prior's error.
-const INNOVATION_WEIGHT: f64 = 0.1;
-
-/// Largest prior error the measured innovation may widen the prior to, radians (20°).
-const INNOVATION_SIGMA_MAX: f64 = 0.35;
+const STALE_PRIOR_TIMEOUT_S: f64 = 1.0;
 
 /// Direction filter, magnetometer calibration and world reference of one tracker.
 pub(super) struct DirectionPrior {
@@ -67,9 +61,6 @@ pub(super) struct DirectionPrior {
     world_fit: Option<(u64, WorldFit)>,
     mag: MagCalibrator,
     last_vision_ns: Option<u64>,
-    /// Running mean square of the angle between the filter's direction and each vision axis it is
-    /// corrected with, rad² (how far off the prior really is).
-    innovation_sq: Option<f64>,
 }
 
 impl DirectionPrior {
@@ -105,7 +96,6 @@ impl DirectionPrior {
             world_fit: None,
             mag: MagCalibrator::new(config.mag_calibration),
             last_vision_ns: None,
-            innovation_sq: None,
         }
     }
 
@@ -204,13 +194,6 @@ impl DirectionPrior {
     /// world reference is known.
     pub(super) fn correct(&mut self, t: u64, direction: &Vector3<f64>, variance: Option<f64>) {
         if self.world.is_some() {
-            if let Some(d) = self.direction_at(t) {
-                let c = d.dot(direction) / (d.norm() * direction.norm()).max(1e-300);
-                let a2 = c.clamp(-1.0, 1.0).acos().powi(2);
-                self.innovation_sq = Some(self.innovation_sq.map_or(a2, |m| {
-                    (1.0 - INNOVATION_WEIGHT) * m + INNOVATION_WEIGHT * a2
-                }));
-            }
             self.filter.get_mut().vision(t, direction, variance);
         }
     }
@@ -231,12 +214,7 @@ impl DirectionPrior {
         let d = self.direction_at(t)?;
         let base = self.options.prior_sigma;
         let age = t.saturating_sub(self.last_vision_ns?);
-        // The filter's own recent error against vision (e.g. an uncalibrated magnetometer pulling its
-        // heading between frames) widens the prior: a bound tighter than the error it has shown would
-        // refuse the very frames that correct it.
-        let base = self
-            .innovation_sq
-            .map_or(base, |m| base.max(2.0 * m.sqrt()).min(INNOVATION_SIGMA_MAX));
+
         if age <= self.options.fused_fresh_ns {
             return Some((d, base));
         }
@@ -340,11 +318,11 @@ mod tests {
         let sigma = p.prior(later).unwrap().1;
         assert!((sigma - (base + cfg.stale_prior_growth * 0.2)).abs() < 1e-15);
         assert_eq!(
-            p.prior(fresh_end + 1_900_000_000).unwrap().1,
+            p.prior(fresh_end + 900_000_000).unwrap().1,
             cfg.stale_prior_max
         );
         // Stale beyond the timeout: none, until vision corrects the filter again.
-        assert!(p.prior(fresh_end + 2_100_000_000).is_none());
+        assert!(p.prior(fresh_end + 1_100_000_000).is_none());
         p.mark_vision(fresh_end + 3_000_000_000);
         assert_eq!(p.prior(fresh_end + 3_000_000_000).unwrap().1, base);
         let mut none = DirectionPrior::new(&TrackerConfig {
