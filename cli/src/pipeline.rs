@@ -3,7 +3,7 @@
 //! (`truth/world.json` → `target`) and of a surface built the same way from the true strokes, so tracking and
 //! reconstruction errors can be told apart (docs/report.md, "Surface").
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::Context;
 use fires_recon::network::{build_network, BuildOptions, Network, NetworkFile, StrokeInput};
@@ -37,8 +37,6 @@ pub struct SurfaceOutputs {
     pub surface: Option<SurfaceReport>,
     /// From the true strokes (simulated recordings only).
     pub surface_from_truth: Option<SurfaceReport>,
-    /// Files written, for the terminal summary.
-    pub files: Vec<PathBuf>,
     /// The tracked strokes' network.
     pub network: NetworkReport,
 }
@@ -132,19 +130,16 @@ pub fn surface_stage(
     strokes: &StrokesFile,
     out: &Path,
 ) -> anyhow::Result<SurfaceOutputs> {
-    let mut files = Vec::new();
     let tracked = crate::network::tracked_inputs(strokes);
     let (net, used, surface) = network_and_surface(&tracked)?;
     let net_path = out.join("network.json");
     std::fs::write(&net_path, NetworkFile::to_json(&net) + "\n")
         .with_context(|| format!("cannot write {}", net_path.display()))?;
-    files.push(net_path);
     let truth = true_object(reader)?;
     let view = truth.as_ref().map(|t| v3(&t.scene.view));
     let mut outputs = SurfaceOutputs {
         surface: None,
         surface_from_truth: None,
-        files: Vec::new(),
         network: NetworkReport {
             faces: net.n_faces(),
             used_strokes: used,
@@ -153,15 +148,13 @@ pub fn surface_stage(
     };
     if let Some((surface, _)) = &surface {
         let path = out.join("surface.obj");
-        files.push(write_surface(surface, &path)?);
-        files.push(path);
+        write_surface(surface, &path)?;
         let png = out.join("surface.png");
         save_png(
             &two_views(&surface_scene(surface, [205, 190, 160]), view),
             &png,
         )
         .with_context(|| format!("cannot write {}", png.display()))?;
-        files.push(png);
     }
     if let Some(truth) = &truth {
         let object = true_object_mesh(&truth.scene);
@@ -184,31 +177,25 @@ pub fn surface_stage(
         }
         save_png(&two_views(&scene, view), &png)
             .with_context(|| format!("cannot write {}", png.display()))?;
-        files.push(png);
         if let Some((surface, method)) = &surface {
             outputs.surface = Some(surface_report(surface, *method, truth)?);
             let png = out.join("surface_error.png");
             save_png(&two_views(&error_scene(surface, truth), view), &png)
                 .with_context(|| format!("cannot write {}", png.display()))?;
-            files.push(png);
         }
         let (tnet, _, tsurface) = network_and_surface(&truth_inputs(&truth.strokes))?;
         let path = out.join("network_truth.json");
         std::fs::write(&path, NetworkFile::to_json(&tnet) + "\n")
             .with_context(|| format!("cannot write {}", path.display()))?;
-        files.push(path);
         if let Some((ts, method)) = &tsurface {
             outputs.surface_from_truth = Some(surface_report(ts, *method, truth)?);
             let path = out.join("surface_truth.obj");
-            files.push(write_surface(ts, &path)?);
-            files.push(path);
+            write_surface(ts, &path)?;
             let png = out.join("surface_truth_error.png");
             save_png(&two_views(&error_scene(ts, truth), view), &png)
                 .with_context(|| format!("cannot write {}", png.display()))?;
-            files.push(png);
         }
     }
-    outputs.files = files;
     Ok(outputs)
 }
 

@@ -4,19 +4,9 @@
 //! network's extent or refuses with a typed error (its flow once returned a surface 30 m across), and
 //! FIRESV1, which solves nothing, always gives one near its curves.
 
-use fires_recon::geometry::Vec3;
+use fires_recon::geometry::{bounding_box, Vec3};
 use fires_recon::network::NetworkFile;
 use fires_recon::surface::{reconstruct_v1, reconstruct_v2, SurfaceError, V1Options, V2Options};
-
-fn extent(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
-    let inf = Vec3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
-    points.fold((inf, -inf), |(lo, hi), p| {
-        (
-            Vec3::new(lo.x.min(p.x), lo.y.min(p.y), lo.z.min(p.z)),
-            Vec3::new(hi.x.max(p.x), hi.y.max(p.y), hi.z.max(p.z)),
-        )
-    })
-}
 
 #[test]
 fn a_tracked_network_with_folded_faces_gives_a_bounded_surface_or_a_typed_error() {
@@ -27,10 +17,11 @@ fn a_tracked_network_with_folded_faces_gives_a_bounded_surface_or_a_typed_error(
     .unwrap();
     let net = NetworkFile::parse(&text).unwrap();
     assert!(net.n_faces() >= 1);
-    let (lo, hi) = extent(
-        net.polylines()
-            .flat_map(|(_, p)| p.points.iter().map(|q| Vec3::new(q[0], q[1], q[2]))),
-    );
+    let points: Vec<Vec3> = net
+        .polylines()
+        .flat_map(|(_, p)| p.points.iter().map(|q| Vec3::new(q[0], q[1], q[2])))
+        .collect();
+    let (lo, hi) = bounding_box(&points);
     let diag = (hi - lo).norm();
     let within = |p: &Vec3| {
         let d = |x: f64, l: f64, h: f64| (l - x).max(0.0).max(x - h);

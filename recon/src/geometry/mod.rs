@@ -10,4 +10,4 @@ pub use triangle::{
     cot_of_angle_between, is_degenerate_triangle, triangle_angles, triangle_area, triangle_normal,
 };
 pub use triangle_bvh::{ClosestHit, TriangleBvh, LEAF_SIZE};
-pub use vec3::Vec3;
+pub use vec3::{bounding_box, Vec3};

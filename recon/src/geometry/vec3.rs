@@ -147,3 +147,14 @@ impl Index<usize> for Vec3 {
         }
     }
 }
+
+/// Axis-aligned bounding box `(min, max)` of `points`; `(+∞, −∞)` when there are none.
+pub fn bounding_box<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> (Vec3, Vec3) {
+    let inf = Vec3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
+    points.into_iter().fold((inf, -inf), |(lo, hi), p| {
+        (
+            Vec3::new(lo.x.min(p.x), lo.y.min(p.y), lo.z.min(p.z)),
+            Vec3::new(hi.x.max(p.x), hi.y.max(p.y), hi.z.max(p.z)),
+        )
+    })
+}

@@ -267,13 +267,7 @@ pub fn compare_surface(
     let p95 = to_truth[rank - 1];
     let s_max = to_truth.last().copied().unwrap_or(0.0);
     let r_max = from_region.iter().copied().fold(0.0, f64::max);
-    let inf = Vec3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
-    let (lo, hi) = truth_region.iter().fold((inf, -inf), |(lo, hi), p| {
-        (
-            Vec3::new(lo.x.min(p.x), lo.y.min(p.y), lo.z.min(p.z)),
-            Vec3::new(hi.x.max(p.x), hi.y.max(p.y), hi.z.max(p.z)),
-        )
-    });
+    let (lo, hi) = crate::geometry::bounding_box(truth_region);
     let diag = (hi - lo).norm();
     if diag.is_nan() || diag <= 0.0 {
         return Err(CompareError::EmptyRegion);

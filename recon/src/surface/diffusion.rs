@@ -200,7 +200,10 @@ impl SurfaceDiffusion {
         // The flow moves a vertex by a fraction of the surface's size; a solve that moves one by more
         // than the whole input's extent has met an ill-conditioned operator (degenerate faces, e.g. from
         // a noisy stroke folding back on itself) and is refused rather than returned.
-        let extent = bounding_diagonal(&self.x0);
+        let extent = {
+            let (lo, hi) = crate::geometry::bounding_box(&self.x0);
+            (hi - lo).norm()
+        };
         let mut c = self.cmat.clone();
         for it in 0..self.opts.outer_iterations {
             if it > 0 && self.opts.update_operators {
@@ -304,18 +307,6 @@ impl SurfaceDiffusion {
         }
         Ok(out)
     }
-}
-
-/// Diagonal of the bounding box of `points`.
-fn bounding_diagonal(points: &[Vec3]) -> f64 {
-    let inf = Vec3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
-    let (lo, hi) = points.iter().fold((inf, -inf), |(lo, hi), p| {
-        (
-            Vec3::new(lo.x.min(p.x), lo.y.min(p.y), lo.z.min(p.z)),
-            Vec3::new(hi.x.max(p.x), hi.y.max(p.y), hi.z.max(p.z)),
-        )
-    });
-    (hi - lo).norm()
 }
 
 /// `(STEP 1 matrix M + τh̄²K_w, STEP 2 normal matrix, C)` at the current operators.

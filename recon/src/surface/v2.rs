@@ -8,7 +8,7 @@
 //! largest (at most [`V2Options::max_levels`]) that keeps the result under [`V2Options::max_vertices`].
 
 use super::catmull_clark::{
-    catmull_clark, interpolating_control, limit_positions, CatmullClarkOptions, CurveKeeping,
+    catmull_clark_n, interpolating_control, limit_positions, CatmullClarkOptions, CurveKeeping,
 };
 use super::control::ControlMesh;
 use super::diffusion::{surface_diffusion, DiffusionOptions};
@@ -97,10 +97,7 @@ pub fn subdivide(
     levels: usize,
     opts: &CatmullClarkOptions,
 ) -> Result<ControlMesh, SurfaceError> {
-    let mut m = c.clone();
-    for _ in 0..levels {
-        m = catmull_clark(&m, opts)?;
-    }
+    let mut m = catmull_clark_n(c, levels, opts)?;
     if opts.keep == CurveKeeping::Limit && levels > 0 {
         let lim = limit_positions(&m, opts);
         m.mesh.positions_mut().copy_from_slice(&lim);
