@@ -15,7 +15,7 @@ use faer::sparse::{SparseRowMat, SymbolicSparseColMat, SymbolicSparseRowMat};
 use faer::{Mat, MatRef, Par};
 
 use crate::solve::{
-    sparse_from_triplets, sparse_mul_dense, CholeskyOptions, CholeskySolver, SolveError,
+    sparse_from_triplets, sparse_mul_dense, CholeskyOptions, CholeskySolver, SharedRhs, SolveError,
     SparseMatrix,
 };
 
@@ -51,6 +51,9 @@ pub struct FactoredQuadratic {
     parts: Vec<TermParts>,
     chol: CholeskySolver,
     x0: Option<Mat<f64>>,
+    /// `−Σ w A_uᵀ W A x₀`, forward-substituted once per factorisation, so a solve
+    /// forward-substitutes only the rows a move changes.
+    shared: Option<SharedRhs>,
 }
 
 fn fe(_: faer::sparse::FaerError) -> SolveError {
@@ -268,6 +271,7 @@ impl FactoredQuadratic {
         }
         let (parts, gram) = Self::assemble(&slot, unknown.len(), kept.len(), terms, x0.as_ref())?;
         let chol = CholeskySolver::new(gram.as_ref(), CholeskyOptions::default())?;
+        let shared = Self::shared_rhs(&chol, &parts)?;
         Ok(Self {
             n,
             unknown,
@@ -276,7 +280,23 @@ impl FactoredQuadratic {
             parts,
             chol,
             x0,
+            shared,
         })
+    }
+
+    /// The reference's constant right-hand side `−Σ w A_uᵀ W A x₀`, prepared by the factor.
+    fn shared_rhs(
+        chol: &CholeskySolver,
+        parts: &[TermParts],
+    ) -> Result<Option<SharedRhs>, SolveError> {
+        let mut sum: Option<Mat<f64>> = None;
+        for r0 in parts.iter().filter_map(|p| p.rhs_x0.as_ref()) {
+            match &mut sum {
+                Some(s) => *s -= r0,
+                None => sum = Some(-r0),
+            }
+        }
+        sum.map(|b| chol.share_rhs(b.as_ref())).transpose()
     }
 
     fn assemble(
@@ -336,6 +356,7 @@ impl FactoredQuadratic {
             self.x0.as_ref(),
         )?;
         self.chol.factorize(gram.as_ref())?;
+        self.shared = Self::shared_rhs(&self.chol, &parts)?;
         self.parts = parts;
         Ok(())
     }
@@ -385,8 +406,10 @@ impl FactoredQuadratic {
             .filter(|&r| (0..c).any(|col| dk[(r, col)] != 0.0))
             .collect();
         for (p, bt) in self.parts.iter().zip(b) {
-            if let Some(r0) = &p.rhs_x0 {
-                rhs -= r0;
+            if self.shared.is_none() {
+                if let Some(r0) = &p.rhs_x0 {
+                    rhs -= r0;
+                }
             }
             let mut r = vec![0.0; p.rows * c];
             let mut touched = vec![false; p.rows];
@@ -429,7 +452,10 @@ impl FactoredQuadratic {
                 }
             }
         }
-        self.chol.solve_in_place(rhs.as_mut())?;
+        match &self.shared {
+            Some(shared) => self.chol.solve_in_place_plus(shared, rhs.as_mut())?,
+            None => self.chol.solve_in_place(rhs.as_mut())?,
+        }
         let mut x = Mat::zeros(self.n, c);
         for (r, &i) in self.unknown.iter().enumerate() {
             for col in 0..c {

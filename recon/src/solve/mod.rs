@@ -1,9 +1,12 @@
 //! Sparse solvers (FIRES thesis, Part I §1.9; docs/architecture.md §8).
 //!
 //! libigl's precompute/solve split on top of faer's sparse Cholesky:
-//! * [`CholeskySolver`]: symbolic analysis (AMD ordering, elimination tree, supernodes)
-//!   done once per sparsity pattern, numeric factorisation redone cheaply when only the
-//!   values change, and solves of many right-hand sides at once (x, y, z together);
+//! * [`CholeskySolver`]: symbolic analysis (AMD or [`nested_dissection`] ordering,
+//!   elimination tree, supernodes) done once per sparsity pattern, numeric factorisation
+//!   redone cheaply when only the values change, and solves of many right-hand sides at
+//!   once (x, y, z together); a right-hand side part shared by many solves is
+//!   forward-substituted once ([`CholeskySolver::share_rhs`]), so a solve whose own part
+//!   has few nonzero rows visits only the supernodes they reach;
 //! * [`FixedSolver`]: `min ½ xᵀAx − xᵀb` with some entries of `x` fixed (libigl
 //!   `min_quad_with_fixed`), eliminating the fixed rows so the system stays SPD;
 //! * [`LeastSquaresSolver`]: stacked soft constraints `Σ wₖ‖Aₖx − bₖ‖²` via the normal
@@ -17,13 +20,18 @@ mod cholesky;
 mod error;
 mod fixed;
 mod least_squares;
+mod ordering;
 mod sparse;
 mod supernodal_solve;
 
-pub use cholesky::{CholeskyOptions, CholeskySolver, FactorMode, Factorization, SolveKernel};
+pub use cholesky::{
+    CholeskyOptions, CholeskySolver, FactorMode, Factorization, FillOrdering, SharedRhs,
+    SolveKernel, ND_MIN_DIM,
+};
 pub use error::SolveError;
 pub use fixed::FixedSolver;
 pub use least_squares::LeastSquaresSolver;
+pub use ordering::nested_dissection;
 pub use sparse::{
     sparse_from_triplets, sparse_mul_dense, sparse_triplets, weighted_gram, SparseMatrix,
 };

@@ -8,6 +8,13 @@
 //! dense kernels. The right-hand sides are
 //! processed `K ≤ 4` at a time, interleaved row-major so each row update touches one
 //! cache line.
+//!
+//! A right-hand side with few nonzero rows (an editing move changes only its handles'
+//! rows) is forward-substituted over the supernodes that can receive a nonzero: the
+//! ancestors in the supernodal elimination tree of the supernodes holding its nonzero
+//! rows (the reach of Gilbert & Peierls, *Sparse partial pivoting in time proportional to
+//! arithmetic operations*, 1988, applied to the etree). The others stay zero, so skipping
+//! them changes no value; the backward substitution still reads the whole factor.
 
 use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::{
@@ -63,7 +70,18 @@ fn supernodes<'a>(
 pub(crate) fn solve_supernodal_llt(
     symbolic: &SymbolicCholesky<usize>,
     values: &[f64],
+    rhs: MatMut<'_, f64>,
+) -> bool {
+    solve_supernodal_llt_plus(symbolic, values, rhs, None)
+}
+
+/// [`solve_supernodal_llt`] of `b + rhs` where `shared` is `L⁻¹ P b` from
+/// [`forward_supernodal_llt`]: only `rhs` is forward-substituted (over its reach).
+pub(crate) fn solve_supernodal_llt_plus(
+    symbolic: &SymbolicCholesky<usize>,
+    values: &[f64],
     mut rhs: MatMut<'_, f64>,
+    shared: Option<MatRef<'_, f64>>,
 ) -> bool {
     let Some(nodes) = supernodes(symbolic, values) else {
         return false;
@@ -81,15 +99,38 @@ pub(crate) fn solve_supernodal_llt(
     while col < rhs.ncols() {
         let k = (rhs.ncols() - col).min(4);
         let block = rhs.rb_mut().subcols_mut(col, k);
+        let base = shared.map(|b| b.subcols(col, k));
         match k {
-            1 => solve_block::<1>(&nodes, fwd, inv, block),
-            2 => solve_block::<2>(&nodes, fwd, inv, block),
-            3 => solve_block::<3>(&nodes, fwd, inv, block),
-            _ => solve_block::<4>(&nodes, fwd, inv, block),
+            1 => solve_block::<1>(&nodes, fwd, inv, block, base),
+            2 => solve_block::<2>(&nodes, fwd, inv, block, base),
+            3 => solve_block::<3>(&nodes, fwd, inv, block, base),
+            _ => solve_block::<4>(&nodes, fwd, inv, block, base),
         }
         col += k;
     }
     true
+}
+
+/// `L⁻¹ P b` in the factor's (permuted) row order, or `None` if the factor is not
+/// supernodal.
+pub(crate) fn forward_supernodal_llt(
+    symbolic: &SymbolicCholesky<usize>,
+    values: &[f64],
+    b: MatRef<'_, f64>,
+) -> Option<Mat<f64>> {
+    let nodes = supernodes(symbolic, values)?;
+    let n = b.nrows();
+    let mut out = Mat::zeros(n, b.ncols());
+    for c in 0..b.ncols() {
+        let mut w: Vec<[f64; 1]> = (0..n)
+            .map(|k| [b[(symbolic.perm().map_or(k, |p| p.arrays().0[k]), c)]])
+            .collect();
+        forward(&nodes, &mut w);
+        for (k, v) in w.iter().enumerate() {
+            out[(k, c)] = v[0];
+        }
+    }
+    Some(out)
 }
 
 fn solve_block<const K: usize>(
@@ -97,12 +138,23 @@ fn solve_block<const K: usize>(
     fwd: &[usize],
     inv: &[usize],
     mut rhs: MatMut<'_, f64>,
+    shared: Option<MatRef<'_, f64>>,
 ) {
     let mut w: Vec<[f64; K]> = fwd
         .iter()
         .map(|&f| std::array::from_fn(|c| rhs[(f, c)]))
         .collect();
-    forward(nodes, &mut w);
+    match reach(nodes, &w) {
+        Some(visit) => forward_on(nodes, &mut w, &visit),
+        None => forward(nodes, &mut w),
+    }
+    if let Some(b) = shared {
+        for (k, r) in w.iter_mut().enumerate() {
+            for (c, v) in r.iter_mut().enumerate() {
+                *v += b[(k, c)];
+            }
+        }
+    }
     backward(nodes, &mut w);
     for (i, &p) in inv.iter().enumerate() {
         for c in 0..K {
@@ -111,36 +163,83 @@ fn solve_block<const K: usize>(
     }
 }
 
+/// The supernodes a forward substitution of `w` must visit, in ascending order, or `None`
+/// when that is most of them (the plain sweep is then cheaper than the bookkeeping).
+fn reach<const K: usize>(nodes: &[Supernode<'_>], w: &[[f64; K]]) -> Option<Vec<usize>> {
+    let nonzero = w.iter().filter(|r| r.iter().any(|&v| v != 0.0)).count();
+    if nonzero * 4 > w.len() {
+        return None;
+    }
+    let mut node_of_col = vec![usize::MAX; w.len()];
+    for (k, s) in nodes.iter().enumerate() {
+        node_of_col[s.start..s.start + s.width].fill(k);
+    }
+    let mut marked = vec![false; nodes.len()];
+    let mut count = 0;
+    for (i, r) in w.iter().enumerate() {
+        if r.iter().all(|&v| v == 0.0) {
+            continue;
+        }
+        let mut k = node_of_col[i];
+        // The parent of a supernode holds its first below-diagonal row.
+        while k != usize::MAX && !marked[k] {
+            marked[k] = true;
+            count += 1;
+            k = nodes[k]
+                .pattern
+                .first()
+                .map_or(usize::MAX, |&r| node_of_col[r]);
+        }
+    }
+    if count * 2 > nodes.len() {
+        return None;
+    }
+    Some((0..nodes.len()).filter(|&k| marked[k]).collect())
+}
+
+/// [`forward`] over the supernodes `visit` only (ascending; all others hold zeros).
+fn forward_on<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]], visit: &[usize]) {
+    let mut tmp: Vec<[f64; K]> = Vec::new();
+    for &k in visit {
+        forward_node(&nodes[k], w, &mut tmp);
+    }
+}
+
 /// `L y = b`: per supernode, a dense triangular solve on the diagonal block, then the
 /// block's contribution to its pattern rows accumulated contiguously and scattered once.
 fn forward<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
     let mut tmp: Vec<[f64; K]> = Vec::new();
     for s in nodes {
-        if s.width >= DENSE_WIDTH {
-            forward_dense(s, w);
-            continue;
+        forward_node(s, w, &mut tmp);
+    }
+}
+
+/// One supernode's step of the forward substitution (`tmp` is scratch).
+fn forward_node<const K: usize>(s: &Supernode<'_>, w: &mut [[f64; K]], tmp: &mut Vec<[f64; K]>) {
+    if s.width >= DENSE_WIDTH {
+        forward_dense(s, w);
+        return;
+    }
+    let rows = s.width + s.pattern.len();
+    tmp.clear();
+    tmp.resize(s.pattern.len(), [0.0; K]);
+    for jj in 0..s.width {
+        let col = &s.values[jj * rows..(jj + 1) * rows];
+        let mut xj = w[s.start + jj];
+        for v in &mut xj {
+            *v /= col[jj];
         }
-        let rows = s.width + s.pattern.len();
-        tmp.clear();
-        tmp.resize(s.pattern.len(), [0.0; K]);
-        for jj in 0..s.width {
-            let col = &s.values[jj * rows..(jj + 1) * rows];
-            let mut xj = w[s.start + jj];
-            for v in &mut xj {
-                *v /= col[jj];
-            }
-            w[s.start + jj] = xj;
-            let (block, below) = col.split_at(s.width);
-            for (ii, &l) in block.iter().enumerate().skip(jj + 1) {
-                sub_scaled(&mut w[s.start + ii], l, &xj);
-            }
-            for (t, &l) in tmp.iter_mut().zip(below) {
-                sub_scaled(t, -l, &xj);
-            }
+        w[s.start + jj] = xj;
+        let (block, below) = col.split_at(s.width);
+        for (ii, &l) in block.iter().enumerate().skip(jj + 1) {
+            sub_scaled(&mut w[s.start + ii], l, &xj);
         }
-        for (&r, t) in s.pattern.iter().zip(&tmp) {
-            sub_scaled(&mut w[r], 1.0, t);
+        for (t, &l) in tmp.iter_mut().zip(below) {
+            sub_scaled(t, -l, &xj);
         }
+    }
+    for (&r, t) in s.pattern.iter().zip(tmp.iter()) {
+        sub_scaled(&mut w[r], 1.0, t);
     }
 }
 

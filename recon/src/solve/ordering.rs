@@ -1,0 +1,433 @@
+//! Fill-reducing orderings for the sparse Cholesky factor.
+//!
+//! [`nested_dissection`] is George's nested dissection (A. George, *Nested dissection of a
+//! regular finite element mesh*, SIAM J. Numer. Anal. 1973) with the automatic separators
+//! of George & Liu (*Computer Solution of Large Sparse Positive Definite Systems*, 1981,
+//! ch. 8: the middle level of a rooted level structure from a pseudo-peripheral node),
+//! applied to the graph with indistinguishable nodes merged (the x, y, z unknowns of one
+//! vertex in a coupled `3n × 3n` system become one node), and approximate minimum degree
+//! (faer's AMD) on the small parts where dissection stops, as METIS's `NodeND` does with
+//! minimum degree.
+//!
+//! On a mesh's operators the separators are level curves of the graph distance, of length
+//! `O(√n)`, so the factor holds `O(n log n)` entries where a pure minimum-degree ordering of
+//! a large surface grows faster; measured on the LSE system of a 100k-vertex ROI it halves
+//! the factor and with it the time of a solve, which is bounded by reading the factor.
+
+use std::collections::HashMap;
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::amd;
+use faer::sparse::SymbolicSparseColMatRef;
+
+use super::SolveError;
+
+/// Parts at most this heavy (in unknowns) are ordered by minimum degree, not dissected.
+const LEAF_WEIGHT: usize = 600;
+
+/// A separator level is searched among levels whose preceding weight lies in this
+/// fraction band of the part's weight; the lightest level wins.
+const BALANCE: (f64, f64) = (0.35, 0.65);
+
+/// Symmetric adjacency (no self loops) of the compressed graph, with node weights.
+struct Graph {
+    xadj: Vec<usize>,
+    adj: Vec<usize>,
+    weight: Vec<usize>,
+}
+
+impl Graph {
+    fn len(&self) -> usize {
+        self.weight.len()
+    }
+
+    fn neighbors(&self, v: usize) -> &[usize] {
+        &self.adj[self.xadj[v]..self.xadj[v + 1]]
+    }
+}
+
+/// The nested-dissection ordering of the pattern of `a + aᵀ` (either triangle or both may
+/// be stored; the diagonal is ignored), as `perm` with `perm[k]` the index eliminated
+/// `k`-th (faer's and AMD's convention for the forward array).
+pub fn nested_dissection(a: SymbolicSparseColMatRef<'_, usize>) -> Result<Vec<usize>, SolveError> {
+    let n = a.ncols();
+    let (full, members) = compress(&symmetric_pattern(a));
+    let mut d = Dissector {
+        g: &full,
+        stamp: vec![0; full.len()],
+        level: vec![usize::MAX; full.len()],
+        next_stamp: 0,
+    };
+    let mut order = Vec::with_capacity(full.len());
+    d.dissect((0..full.len()).collect(), &mut order)?;
+    let mut perm = Vec::with_capacity(n);
+    for c in order {
+        perm.extend_from_slice(&members[c]);
+    }
+    debug_assert_eq!(perm.len(), n);
+    Ok(perm)
+}
+
+/// Both triangles of `a`'s pattern, sorted, without the diagonal, as a graph of unit
+/// weights.
+fn symmetric_pattern(a: SymbolicSparseColMatRef<'_, usize>) -> Graph {
+    let n = a.ncols();
+    let mut count = vec![0usize; n + 1];
+    for j in 0..n {
+        for i in a.row_idx_of_col(j) {
+            if i != j && i < n {
+                count[i] += 1;
+                count[j] += 1;
+            }
+        }
+    }
+    let mut xadj = vec![0usize; n + 1];
+    for v in 0..n {
+        xadj[v + 1] = xadj[v] + count[v];
+    }
+    let mut fill = xadj.clone();
+    let mut adj = vec![0usize; xadj[n]];
+    for j in 0..n {
+        for i in a.row_idx_of_col(j) {
+            if i != j && i < n {
+                adj[fill[i]] = j;
+                fill[i] += 1;
+                adj[fill[j]] = i;
+                fill[j] += 1;
+            }
+        }
+    }
+    // Sort and deduplicate each list in place, compacting.
+    let mut out = 0;
+    let mut start = 0;
+    for v in 0..n {
+        let end = xadj[v + 1];
+        adj[start..end].sort_unstable();
+        let begin = out;
+        for k in start..end {
+            if out == begin || adj[out - 1] != adj[k] {
+                adj[out] = adj[k];
+                out += 1;
+            }
+        }
+        start = end;
+        xadj[v + 1] = out;
+    }
+    adj.truncate(out);
+    Graph {
+        xadj,
+        adj,
+        weight: vec![1; n],
+    }
+}
+
+/// Whether `u` and `v` have equal closed neighbourhoods (`N[u] = N[v]`).
+fn indistinguishable(g: &Graph, u: usize, v: usize) -> bool {
+    let (a, b) = (g.neighbors(u), g.neighbors(v));
+    if a.len() != b.len() || a.binary_search(&v).is_err() {
+        return false;
+    }
+    // N(u) \ {v} == N(v) \ {u}, both sorted.
+    let mut ia = a.iter().filter(|&&x| x != v);
+    let mut ib = b.iter().filter(|&&x| x != u);
+    loop {
+        match (ia.next(), ib.next()) {
+            (None, None) => return true,
+            (Some(x), Some(y)) if x == y => {}
+            _ => return false,
+        }
+    }
+}
+
+/// Merges indistinguishable nodes (equal closed neighbourhoods) into one weighted node.
+fn compress(g: &Graph) -> (Graph, Vec<Vec<usize>>) {
+    let n = g.len();
+    // A hash of the closed neighbourhood picks the candidates compared exactly.
+    let key = |v: usize| {
+        let mix = |x: usize| (x as u64 ^ 0x9e37_79b9_7f4a_7c15).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        g.neighbors(v)
+            .iter()
+            .fold(mix(v), |h, &u| h.wrapping_add(mix(u)))
+    };
+    let mut reps: HashMap<u64, Vec<usize>> = HashMap::new();
+    let mut node_of = vec![0usize; n];
+    let mut members: Vec<Vec<usize>> = Vec::new();
+    for (v, slot) in node_of.iter_mut().enumerate() {
+        let list = reps.entry(key(v)).or_default();
+        let found = list
+            .iter()
+            .copied()
+            .find(|&c| indistinguishable(g, members[c][0], v));
+        let id = match found {
+            Some(c) => c,
+            None => {
+                members.push(Vec::new());
+                list.push(members.len() - 1);
+                members.len() - 1
+            }
+        };
+        members[id].push(v);
+        *slot = id;
+    }
+    let m = members.len();
+    let mut xadj = Vec::with_capacity(m + 1);
+    let mut flat = Vec::new();
+    xadj.push(0);
+    let mut nb = Vec::new();
+    for (id, mem) in members.iter().enumerate() {
+        nb.clear();
+        nb.extend(
+            g.neighbors(mem[0])
+                .iter()
+                .map(|&u| node_of[u])
+                .filter(|&c| c != id),
+        );
+        nb.sort_unstable();
+        nb.dedup();
+        flat.extend_from_slice(&nb);
+        xadj.push(flat.len());
+    }
+    let weight = members.iter().map(Vec::len).collect();
+    (
+        Graph {
+            xadj,
+            adj: flat,
+            weight,
+        },
+        members,
+    )
+}
+
+struct Dissector<'g> {
+    g: &'g Graph,
+    /// Membership of the part being processed (`stamp[v] == current`).
+    stamp: Vec<u32>,
+    /// BFS level within the current part.
+    level: Vec<usize>,
+    next_stamp: u32,
+}
+
+impl Dissector<'_> {
+    fn mark(&mut self, nodes: &[usize]) -> u32 {
+        self.next_stamp += 1;
+        let s = self.next_stamp;
+        for &v in nodes {
+            self.stamp[v] = s;
+            self.level[v] = usize::MAX;
+        }
+        s
+    }
+
+    fn weight(&self, nodes: &[usize]) -> usize {
+        nodes.iter().map(|&v| self.g.weight[v]).sum()
+    }
+
+    /// Appends `nodes` to `out` in elimination order: the two sides, then the separator.
+    fn dissect(&mut self, nodes: Vec<usize>, out: &mut Vec<usize>) -> Result<(), SolveError> {
+        if nodes.is_empty() {
+            return Ok(());
+        }
+        if self.weight(&nodes) <= LEAF_WEIGHT {
+            return self.leaf(&nodes, out);
+        }
+        let s = self.mark(&nodes);
+        // Components, each dissected on its own.
+        let first = self.levels_from(nodes[0], s);
+        let reached: usize = first.iter().map(Vec::len).sum();
+        if reached < nodes.len() {
+            let mut comps = Vec::new();
+            for &v in &nodes {
+                if self.level[v] == usize::MAX {
+                    let comp: Vec<usize> = self.levels_from(v, s).concat();
+                    comps.push(comp);
+                }
+            }
+            comps.push(first.concat());
+            for c in comps {
+                self.dissect(c, out)?;
+            }
+            return Ok(());
+        }
+        let mut levels = self.peripheral_levels(first, s);
+        if levels.len() < 3 {
+            return self.leaf(&nodes, out);
+        }
+        let total = self.weight(&nodes);
+        let mut k = self.balanced_cut(&levels, total);
+        // Other roots: the ends of the chosen separator (cuts across the first one's
+        // direction); the lightest balanced separator wins.
+        let ends = [levels[k][0], levels[k][levels[k].len() - 1]];
+        for root in ends {
+            let w_best = self.weight(&levels[k]);
+            self.clear_levels(&levels);
+            let other = self.levels_from(root, s);
+            if other.len() >= 3 {
+                let ko = self.balanced_cut(&other, total);
+                if self.weight(&other[ko]) < w_best {
+                    levels = other;
+                    k = ko;
+                    continue;
+                }
+            }
+            self.clear_levels(&other);
+            self.set_levels(&levels);
+        }
+        // Separator nodes with no neighbour beyond it belong to the near side.
+        let mut near: Vec<usize> = levels[..k].concat();
+        let mut sep = Vec::new();
+        for &v in &levels[k] {
+            let touches_far = self
+                .g
+                .neighbors(v)
+                .iter()
+                .any(|&u| self.stamp[u] == s && self.level[u] == k + 1);
+            if touches_far {
+                sep.push(v);
+            } else {
+                near.push(v);
+            }
+        }
+        let far: Vec<usize> = levels[k + 1..].concat();
+        self.dissect(near, out)?;
+        self.dissect(far, out)?;
+        out.extend_from_slice(&sep);
+        Ok(())
+    }
+
+    /// The level whose removal splits `levels` most evenly-and-lightly: the lightest level
+    /// whose preceding weight is within [`BALANCE`] of `total`, else the median level.
+    fn balanced_cut(&self, levels: &[Vec<usize>], total: usize) -> usize {
+        let total = total as f64;
+        let mut before = 0usize;
+        let mut best: Option<(usize, usize)> = None;
+        let mut half: Option<usize> = None;
+        for (k, l) in levels.iter().enumerate().take(levels.len() - 1).skip(1) {
+            before += self.weight(&levels[k - 1]);
+            let f = before as f64 / total;
+            let w = self.weight(l);
+            if half.is_none() && f + w as f64 / total >= 0.5 {
+                half = Some(k);
+            }
+            if f >= BALANCE.0 && f <= BALANCE.1 && best.is_none_or(|(_, bw)| w < bw) {
+                best = Some((k, w));
+            }
+        }
+        best.map(|b| b.0).or(half).unwrap_or(levels.len() / 2)
+    }
+
+    fn clear_levels(&mut self, levels: &[Vec<usize>]) {
+        for l in levels {
+            for &v in l {
+                self.level[v] = usize::MAX;
+            }
+        }
+    }
+
+    fn set_levels(&mut self, levels: &[Vec<usize>]) {
+        for (k, l) in levels.iter().enumerate() {
+            for &v in l {
+                self.level[v] = k;
+            }
+        }
+    }
+
+    /// The rooted level structure of `root` within the part `s` (sets `level`).
+    fn levels_from(&mut self, root: usize, s: u32) -> Vec<Vec<usize>> {
+        let mut levels = vec![vec![root]];
+        self.level[root] = 0;
+        loop {
+            let k = levels.len();
+            let mut next = Vec::new();
+            for &v in &levels[k - 1] {
+                for &u in self.g.neighbors(v) {
+                    if self.stamp[u] == s && self.level[u] == usize::MAX {
+                        self.level[u] = k;
+                        next.push(u);
+                    }
+                }
+            }
+            if next.is_empty() {
+                return levels;
+            }
+            levels.push(next);
+        }
+    }
+
+    /// George–Liu pseudo-peripheral node search: restart from a minimum-degree node of the
+    /// last level while the eccentricity grows; returns that node's level structure.
+    fn peripheral_levels(&mut self, mut levels: Vec<Vec<usize>>, s: u32) -> Vec<Vec<usize>> {
+        for _ in 0..4 {
+            let last = levels.last().map(Vec::as_slice).unwrap_or(&[]);
+            let Some(&cand) = last.iter().min_by_key(|&&v| self.g.neighbors(v).len()) else {
+                break;
+            };
+            for l in &levels {
+                for &v in l {
+                    self.level[v] = usize::MAX;
+                }
+            }
+            let again = self.levels_from(cand, s);
+            if again.len() <= levels.len() {
+                // Keep the deeper structure, restoring its levels.
+                for l in &again {
+                    for &v in l {
+                        self.level[v] = usize::MAX;
+                    }
+                }
+                for (k, l) in levels.iter().enumerate() {
+                    for &v in l {
+                        self.level[v] = k;
+                    }
+                }
+                break;
+            }
+            levels = again;
+        }
+        levels
+    }
+
+    /// Minimum-degree order of a small part (its induced subgraph).
+    fn leaf(&mut self, nodes: &[usize], out: &mut Vec<usize>) -> Result<(), SolveError> {
+        let m = nodes.len();
+        if m <= 2 {
+            out.extend_from_slice(nodes);
+            return Ok(());
+        }
+        let s = self.mark(nodes);
+        let mut local = HashMap::with_capacity(m);
+        for (i, &v) in nodes.iter().enumerate() {
+            local.insert(v, i);
+        }
+        let mut col_ptr = Vec::with_capacity(m + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for &v in nodes {
+            let mut rows: Vec<usize> = self
+                .g
+                .neighbors(v)
+                .iter()
+                .filter(|&&u| self.stamp[u] == s)
+                .filter_map(|u| local.get(u).copied())
+                .collect();
+            rows.sort_unstable();
+            row_idx.extend_from_slice(&rows);
+            col_ptr.push(row_idx.len());
+        }
+        let nnz = row_idx.len();
+        let pattern = faer::sparse::SymbolicSparseColMat::new_checked(m, m, col_ptr, None, row_idx);
+        let mut perm = vec![0usize; m];
+        let mut perm_inv = vec![0usize; m];
+        let req = amd::order_scratch::<usize>(m, nnz);
+        let mut mem = MemBuffer::try_new(req).map_err(|_| SolveError::OutOfMemory)?;
+        amd::order(
+            &mut perm,
+            &mut perm_inv,
+            pattern.as_ref(),
+            amd::Control::default(),
+            MemStack::new(&mut mem),
+        )
+        .map_err(|_| SolveError::OutOfMemory)?;
+        out.extend(perm.iter().map(|&i| nodes[i]));
+        Ok(())
+    }
+}

@@ -1,0 +1,256 @@
+//! Nested dissection ordering and the sparse-right-hand-side solve: valid permutations on
+//! any pattern, a smaller factor than AMD on mesh systems, and solves equal to the plain
+//! ones.
+
+use faer::Mat;
+use fires_recon::generate::{icosphere, plane_grid};
+use fires_recon::solve::*;
+use fires_recon::SurfaceMesh;
+
+/// SplitMix64, for seeded random patterns.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+fn is_permutation(p: &[usize], n: usize) -> bool {
+    let mut seen = vec![false; n];
+    p.len() == n && p.iter().all(|&i| i < n && !std::mem::replace(&mut seen[i], true))
+}
+
+/// The lower triangle of the mesh graph Laplacian plus `shift`·I (SPD), with `block`
+/// unknowns per vertex coupled densely, over the `rings`-ring neighbourhoods.
+fn mesh_system(m: &SurfaceMesh, rings: usize, block: usize, shift: f64) -> SparseMatrix {
+    let n = m.n_vertices();
+    let one: Vec<Vec<usize>> = m
+        .vertices()
+        .map(|v| m.vertex_vertices(v).map(|u| u.idx()).collect())
+        .collect();
+    let mut t = Vec::new();
+    for i in 0..n {
+        let mut near = vec![i];
+        for _ in 0..rings {
+            let mut next = near.clone();
+            for &u in &near {
+                next.extend_from_slice(&one[u]);
+            }
+            next.sort_unstable();
+            next.dedup();
+            near = next;
+        }
+        for &j in &near {
+            if j == i {
+                continue;
+            }
+            for a in 0..block {
+                for b in 0..block {
+                    let (r, c) = (block * i + a, block * j + b);
+                    if c < r {
+                        t.push((r, c, -1.0 / (1.0 + (a + b) as f64)));
+                    }
+                }
+            }
+        }
+        for a in 0..block {
+            for b in 0..a {
+                t.push((block * i + a, block * i + b, 0.1));
+            }
+        }
+    }
+    // Diagonal dominance makes it SPD.
+    let mut diag = vec![shift; block * n];
+    for &(r, c, v) in &t {
+        let v: f64 = v;
+        diag[r] += v.abs();
+        diag[c] += v.abs();
+    }
+    for (r, d) in diag.into_iter().enumerate() {
+        t.push((r, r, d));
+    }
+    sparse_from_triplets(block * n, block * n, &t).expect("valid triplets")
+}
+
+#[test]
+fn nested_dissection_is_a_permutation_of_any_pattern() {
+    let mut rng = Rng(7);
+    for case in 0..60 {
+        let n = 1 + rng.below(400);
+        let mut t: Vec<(usize, usize, f64)> = (0..n).map(|i| (i, i, 1.0)).collect();
+        // Sparse random edges, some isolated nodes, repeated entries, and a few dense rows.
+        let edges = rng.below(4 * n + 1);
+        for _ in 0..edges {
+            let (i, j) = (rng.below(n), rng.below(n));
+            t.push((i.max(j), i.min(j), 0.5));
+        }
+        if case % 7 == 0 {
+            let hub = rng.below(n);
+            for j in 0..n {
+                t.push((hub.max(j), hub.min(j), 0.25));
+            }
+        }
+        let a = sparse_from_triplets(n, n, &t).unwrap();
+        let p = nested_dissection(a.symbolic()).unwrap();
+        assert!(is_permutation(&p, n), "case {case}: n = {n}");
+    }
+    // Degenerate shapes.
+    for n in [0usize, 1, 2] {
+        let a = sparse_from_triplets(n, n, &[]).unwrap();
+        assert!(is_permutation(&nested_dissection(a.symbolic()).unwrap(), n));
+    }
+}
+
+#[test]
+fn indistinguishable_unknowns_stay_together() {
+    // Three unknowns per vertex with identical patterns: the ordering keeps each vertex's
+    // unknowns consecutive (they are one node of the dissected graph).
+    let m = plane_grid(20, 20, 1.0, 1.0, false);
+    let a = mesh_system(&m, 1, 3, 1.0);
+    let p = nested_dissection(a.symbolic()).unwrap();
+    assert!(is_permutation(&p, a.nrows()));
+    for chunk in p.chunks(3) {
+        let v = chunk[0] / 3;
+        assert!(chunk.iter().all(|&i| i / 3 == v), "{chunk:?}");
+    }
+}
+
+fn factor_len(a: &SparseMatrix, ordering: FillOrdering) -> usize {
+    let opts = CholeskyOptions {
+        ordering,
+        ..Default::default()
+    };
+    CholeskySolver::analyze(a.as_ref(), opts)
+        .unwrap()
+        .factor_len()
+}
+
+#[test]
+fn nested_dissection_factor_is_smaller_than_amd_on_sphere_systems_and_auto_keeps_the_smaller() {
+    // A 2-ring, 3×3-block system (the shape of Laplacian surface editing's) on a sphere
+    // and a plain 1-ring system: dissection's separators are O(√n), and its factor was
+    // measured 0.76× AMD's on the 90k-unknown LSE pattern. On a square grid the level-set
+    // separators run diagonally and AMD wins; `Auto` keeps the smaller of the two.
+    let grid = plane_grid(100, 100, 1.0, 1.0, false);
+    let sphere = icosphere(5, 1.0);
+    for (name, a) in [
+        ("grid lse", mesh_system(&grid, 2, 3, 1.0)),
+        ("sphere lse", mesh_system(&sphere, 2, 3, 1.0)),
+        ("sphere cotan", mesh_system(&icosphere(6, 1.0), 1, 1, 1.0)),
+    ] {
+        let (amd, nd) = (
+            factor_len(&a, FillOrdering::Amd),
+            factor_len(&a, FillOrdering::NestedDissection),
+        );
+        let auto = factor_len(&a, FillOrdering::Auto);
+        assert_eq!(auto, nd.min(amd), "{name}: Auto keeps the smaller factor");
+        if !name.starts_with("grid") {
+            assert!(
+                (nd as f64) < 0.92 * amd as f64,
+                "{name}: nested dissection {nd} entries, AMD {amd}"
+            );
+        }
+    }
+}
+
+fn rhs(n: usize, c: usize, seed: u64) -> Mat<f64> {
+    let mut rng = Rng(seed);
+    Mat::from_fn(n, c, |_, _| (rng.below(2001) as f64 - 1000.0) / 100.0)
+}
+
+fn max_rel_diff(a: &Mat<f64>, b: &Mat<f64>) -> f64 {
+    let mut scale = 0.0f64;
+    let mut diff = 0.0f64;
+    for j in 0..a.ncols() {
+        for i in 0..a.nrows() {
+            scale = scale.max(b[(i, j)].abs());
+            diff = diff.max((a[(i, j)] - b[(i, j)]).abs());
+        }
+    }
+    diff / scale
+}
+
+#[test]
+fn orderings_give_the_same_solution() {
+    let a = mesh_system(&plane_grid(40, 40, 1.0, 1.0, false), 2, 3, 0.5);
+    let b = rhs(a.nrows(), 3, 11);
+    let solve = |ordering| {
+        let opts = CholeskyOptions {
+            ordering,
+            ..Default::default()
+        };
+        CholeskySolver::new(a.as_ref(), opts)
+            .unwrap()
+            .solve(b.as_ref())
+            .unwrap()
+    };
+    let (x_amd, x_nd) = (solve(FillOrdering::Amd), solve(FillOrdering::NestedDissection));
+    assert!(max_rel_diff(&x_nd, &x_amd) < 1e-12);
+    // And it solves the system.
+    let ax = sparse_mul_dense_sym(&a, &x_nd);
+    assert!(max_rel_diff(&ax, &b) < 1e-11);
+}
+
+/// `A x` for `A` stored as its lower triangle.
+fn sparse_mul_dense_sym(a: &SparseMatrix, x: &Mat<f64>) -> Mat<f64> {
+    let mut y = Mat::zeros(a.nrows(), x.ncols());
+    for (i, j, v) in sparse_triplets(a.as_ref()) {
+        for c in 0..x.ncols() {
+            y[(i, c)] += v * x[(j, c)];
+            if i != j {
+                y[(j, c)] += v * x[(i, c)];
+            }
+        }
+    }
+    y
+}
+
+#[test]
+fn shared_rhs_solve_equals_the_plain_solve() {
+    // B₀ dense, forward-substituted once; R nonzero on a few rows (a handle move), or
+    // dense; supernodal and simplicial factors, both orderings.
+    let a = mesh_system(&plane_grid(40, 40, 1.0, 1.0, false), 2, 3, 0.5);
+    let n = a.nrows();
+    for mode in [FactorMode::Supernodal, FactorMode::Simplicial] {
+        for ordering in [FillOrdering::Amd, FillOrdering::NestedDissection] {
+            let opts = CholeskyOptions {
+                ordering,
+                mode,
+                ..Default::default()
+            };
+            let chol = CholeskySolver::new(a.as_ref(), opts).unwrap();
+            for c in [1usize, 3] {
+                let b0 = rhs(n, c, 3);
+                let shared = chol.share_rhs(b0.as_ref()).unwrap();
+                let mut sparse = Mat::zeros(n, c);
+                for r in [5usize, 6, 7, 300, 301, 302] {
+                    for col in 0..c {
+                        sparse[(r, col)] = 1.0 + (r + col) as f64;
+                    }
+                }
+                for r in [sparse, rhs(n, c, 5), Mat::zeros(n, c)] {
+                    let full = chol.solve((&b0 + &r).as_ref()).unwrap();
+                    let mut x = r.clone();
+                    chol.solve_in_place_plus(&shared, x.as_mut()).unwrap();
+                    assert!(
+                        max_rel_diff(&x, &full) < 1e-12,
+                        "{mode:?} {ordering:?} c = {c}"
+                    );
+                }
+            }
+            // A shared part of the wrong shape is an error, not a panic.
+            let shared = chol.share_rhs(rhs(n, 2, 1).as_ref()).unwrap();
+            let mut x = Mat::zeros(n, 1);
+            assert!(chol.solve_in_place_plus(&shared, x.as_mut()).is_err());
+        }
+    }
+}
