@@ -26,7 +26,9 @@ impl Rng {
 
 fn is_permutation(p: &[usize], n: usize) -> bool {
     let mut seen = vec![false; n];
-    p.len() == n && p.iter().all(|&i| i < n && !std::mem::replace(&mut seen[i], true))
+    p.len() == n
+        && p.iter()
+            .all(|&i| i < n && !std::mem::replace(&mut seen[i], true))
 }
 
 /// The lower triangle of the mesh graph Laplacian plus `shift`·I (SPD), with `block`
@@ -193,7 +195,10 @@ fn orderings_give_the_same_solution() {
             .solve(b.as_ref())
             .unwrap()
     };
-    let (x_amd, x_nd) = (solve(FillOrdering::Amd), solve(FillOrdering::NestedDissection));
+    let (x_amd, x_nd) = (
+        solve(FillOrdering::Amd),
+        solve(FillOrdering::NestedDissection),
+    );
     assert!(max_rel_diff(&x_nd, &x_amd) < 1e-12);
     // And it solves the system.
     let ax = sparse_mul_dense_sym(&a, &x_nd);

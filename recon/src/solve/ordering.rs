@@ -25,6 +25,10 @@ use super::SolveError;
 /// Parts at most this heavy (in unknowns) are ordered by minimum degree, not dissected.
 const LEAF_WEIGHT: usize = 600;
 
+/// Restarts of the pseudo-peripheral node search (George & Liu stop when the eccentricity
+/// stops growing; on meshes it settles in one or two).
+const PERIPHERAL_SWEEPS: usize = 2;
+
 /// A separator level is searched among levels whose preceding weight lies in this
 /// fraction band of the part's weight; the lightest level wins.
 const BALANCE: (f64, f64) = (0.35, 0.65);
@@ -248,30 +252,12 @@ impl Dissector<'_> {
             }
             return Ok(());
         }
-        let mut levels = self.peripheral_levels(first, s);
+        let levels = self.peripheral_levels(first, s);
         if levels.len() < 3 {
             return self.leaf(&nodes, out);
         }
         let total = self.weight(&nodes);
-        let mut k = self.balanced_cut(&levels, total);
-        // Other roots: the ends of the chosen separator (cuts across the first one's
-        // direction); the lightest balanced separator wins.
-        let ends = [levels[k][0], levels[k][levels[k].len() - 1]];
-        for root in ends {
-            let w_best = self.weight(&levels[k]);
-            self.clear_levels(&levels);
-            let other = self.levels_from(root, s);
-            if other.len() >= 3 {
-                let ko = self.balanced_cut(&other, total);
-                if self.weight(&other[ko]) < w_best {
-                    levels = other;
-                    k = ko;
-                    continue;
-                }
-            }
-            self.clear_levels(&other);
-            self.set_levels(&levels);
-        }
+        let k = self.balanced_cut(&levels, total);
         // Separator nodes with no neighbour beyond it belong to the near side.
         let mut near: Vec<usize> = levels[..k].concat();
         let mut sep = Vec::new();
@@ -356,29 +342,17 @@ impl Dissector<'_> {
     /// George–Liu pseudo-peripheral node search: restart from a minimum-degree node of the
     /// last level while the eccentricity grows; returns that node's level structure.
     fn peripheral_levels(&mut self, mut levels: Vec<Vec<usize>>, s: u32) -> Vec<Vec<usize>> {
-        for _ in 0..4 {
+        for _ in 0..PERIPHERAL_SWEEPS {
             let last = levels.last().map(Vec::as_slice).unwrap_or(&[]);
             let Some(&cand) = last.iter().min_by_key(|&&v| self.g.neighbors(v).len()) else {
                 break;
             };
-            for l in &levels {
-                for &v in l {
-                    self.level[v] = usize::MAX;
-                }
-            }
+            self.clear_levels(&levels);
             let again = self.levels_from(cand, s);
             if again.len() <= levels.len() {
                 // Keep the deeper structure, restoring its levels.
-                for l in &again {
-                    for &v in l {
-                        self.level[v] = usize::MAX;
-                    }
-                }
-                for (k, l) in levels.iter().enumerate() {
-                    for &v in l {
-                        self.level[v] = k;
-                    }
-                }
+                self.clear_levels(&again);
+                self.set_levels(&levels);
                 break;
             }
             levels = again;
