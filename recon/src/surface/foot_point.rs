@@ -186,7 +186,7 @@ impl<'a> FootPointSolver<'a> {
 fn solve_spd(h: [[f64; 2]; 2], g: [f64; 2]) -> Option<[f64; 2]> {
     let det = h[0][0] * h[1][1] - h[0][1] * h[1][0];
     let tr = h[0][0] + h[1][1];
-    if !(h[0][0] > 0.0 && det > 1e-14 * tr * tr) || !det.is_finite() {
+    if !(h[0][0] > 0.0 && det > 1e-14 * tr * tr && det.is_finite()) {
         return None;
     }
     Some([
