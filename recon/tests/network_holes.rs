@@ -424,3 +424,103 @@ fn pen_mode_3_makes_holes_when_building_from_strokes() {
     let (_, report) = build_network(&first_hole, &BuildOptions::default());
     assert_eq!(report.boundary, Some(0));
 }
+
+/// The benchmark's network of exactly 100 faces: a circle of radius 0.2 m with 9 + 9 lines 30 mm apart.
+fn hundred_faces() -> Network {
+    let (drawing, _) = common::disc::grid_drawing(0.2, 9, 0.03, 0, 0.003);
+    let strokes: Vec<StrokeInput> = drawing
+        .into_iter()
+        .enumerate()
+        .map(|(id, (points, closed))| StrokeInput {
+            id: id as u32,
+            points,
+            closed,
+            sigma_mm: None,
+            mode: 0,
+        })
+        .collect();
+    let (net, report) = build_network(&strokes, &BuildOptions::default());
+    assert_eq!(report.topology.faces, 100);
+    net
+}
+
+#[test]
+fn random_holes_keep_the_invariants_and_the_bookkeeping() {
+    let mut net = hundred_faces();
+    let mut rng = Rng(0x401e_5eed);
+    let (mut spokes, mut cuts, mut refused) = (0, 0, 0);
+    for _ in 0..60 {
+        // Half the holes anywhere (mostly crossing curves), half near a grid cell's centre and small
+        // enough to cross nothing.
+        let (cx, cy, r) = if rng.unit() < 0.5 {
+            (
+                rng.range(-0.15, 0.15),
+                rng.range(-0.15, 0.15),
+                rng.range(0.003, 0.025),
+            )
+        } else {
+            let cell = |u: f64| -0.105 + 0.03 * (u * 8.0).floor().min(7.0);
+            (
+                cell(rng.unit()) + rng.range(-0.003, 0.003),
+                cell(rng.unit()) + rng.range(-0.003, 0.003),
+                rng.range(0.003, 0.006),
+            )
+        };
+        let before = net.topology();
+        match hole(&mut net, &ring(cx, cy, r, 80, rng.unit() < 0.5)) {
+            Ok(rep) => {
+                let t = net.topology();
+                assert_eq!(t.genus, 0, "hole ({cx}, {cy}) r {r}: {:?}\n{before:?}\n{t:?}", rep.kind);
+                match rep.kind {
+                    HoleKind::Spokes { sides, .. } => {
+                        let n = sides as i64;
+                        let d = (
+                            t.vertices as i64 - before.vertices as i64,
+                            t.edges as i64 - before.edges as i64,
+                            t.faces as i64 - before.faces as i64,
+                        );
+                        assert_eq!(d, (n, 2 * n, n - 1));
+                        assert_eq!(t.boundaries, before.boundaries + 1);
+                        spokes += 1;
+                    }
+                    HoleKind::Cut { crossings } => {
+                        assert!(crossings >= 2);
+                        cuts += 1;
+                    }
+                }
+            }
+            Err(_) => refused += 1,
+        }
+    }
+    let t = net.topology();
+    println!("random holes: {spokes} with spokes, {cuts} cut, {refused} refused; now {t:?}");
+    assert!(spokes >= 5 && cuts >= 5, "{spokes} spokes, {cuts} cuts");
+}
+
+#[test]
+#[ignore = "benchmark: run in release with --ignored --nocapture"]
+fn bench_hole_on_100_faces() {
+    let net = hundred_faces();
+    let cases = [
+        ("hole_spokes", ring(0.015, 0.015, 0.008, 80, true)),
+        ("hole_cut", ring(0.0, 0.0, 0.012, 80, true)),
+    ];
+    for (name, c) in &cases {
+        let mut times = Vec::new();
+        let mut kind = None;
+        for _ in 0..51 {
+            let mut n = net.clone();
+            let t0 = std::time::Instant::now();
+            let (r, _) = create_hole(&mut n, CurveInput::new(c), &HoleOptions::default()).unwrap();
+            times.push(t0.elapsed().as_secs_f64() * 1e3);
+            kind = Some(r.kind);
+        }
+        times.sort_by(f64::total_cmp);
+        println!(
+            "{{\"tool\":\"{name}\",\"faces\":100,\"points\":{},\"median_ms\":{:.4},\"kind\":\"{:?}\"}}",
+            c.len(),
+            times[times.len() / 2],
+            kind
+        );
+    }
+}

@@ -71,6 +71,8 @@ pub enum HoleRule {
     Separates,
     /// Removing the inside leaves no vertex with a single edge.
     NoDangling,
+    /// The hole's border touches no other border (a vertex shared by two border loops is not a surface).
+    ClearOfBorder,
 }
 
 impl HoleRule {
@@ -82,6 +84,7 @@ impl HoleRule {
             HoleRule::Convex => "hole is convex",
             HoleRule::Separates => "hole separates the surface",
             HoleRule::NoDangling => "hole leaves no dangling edge",
+            HoleRule::ClearOfBorder => "hole keeps clear of the border",
         }
     }
 }
@@ -217,6 +220,6 @@ pub fn create_hole(
     net.transact(|net| {
         let (edges, vertices) =
             super::hole_cut::insert_loop(net, &rotated, &hits, vertex_snap, thr, curve.stroke)?;
-        super::hole_cut::remove_inside(net, &edges, vertices.len())
+        super::hole_cut::remove_inside(net, &edges, &vertices)
     })
 }

@@ -20,7 +20,9 @@
 //! vector areas).
 //!
 //! Then the inside faces are removed, every edge left with no face is removed with its polyline, and
-//! every vertex left with no edge; a vertex left with a single edge is refused (the network is restored).
+//! every vertex left with no edge; a vertex left with a single edge is refused (the network is restored),
+//! and so is a hole whose border shares a vertex with another border (its loop snapped onto a border
+//! vertex: two border loops through one vertex are not a surface).
 
 use std::collections::BTreeSet;
 
@@ -271,7 +273,7 @@ fn face_area(net: &Network, f: FaceId) -> f64 {
 pub(super) fn remove_inside(
     net: &mut Network,
     hole: &[EdgeId],
-    crossings: usize,
+    crossings: &[VertexId],
 ) -> Result<HoleReport, ToolError> {
     let wall: BTreeSet<EdgeId> = hole.iter().copied().collect();
     let (mut fwd, mut rev) = (Vec::new(), Vec::new());
@@ -351,6 +353,22 @@ pub(super) fn remove_inside(
             _ => {}
         }
     }
+    // The hole's border must not touch another border (its vertex snapped onto a border vertex).
+    for &v in crossings {
+        let border = net.vertex(v).map_or(0, |vx| {
+            vx.edges
+                .iter()
+                .filter(|&&e| net.edge(e).is_some_and(|ed| ed.faces.len() == 1))
+                .count()
+        });
+        if border > 2 {
+            return Err(refuse(
+                HoleRule::ClearOfBorder,
+                format!("the hole's border meets another border at vertex {v}"),
+                None,
+            ));
+        }
+    }
     let faces: Vec<FaceId> = outside
         .iter()
         .copied()
@@ -360,7 +378,9 @@ pub(super) fn remove_inside(
         })
         .collect();
     Ok(HoleReport {
-        kind: HoleKind::Cut { crossings },
+        kind: HoleKind::Cut {
+            crossings: crossings.len(),
+        },
         hole_edges: hole.to_vec(),
         spokes: Vec::new(),
         faces,

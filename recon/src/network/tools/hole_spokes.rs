@@ -2,11 +2,12 @@
 //! joined to the face's n vertices by n generated spokes.
 //!
 //! 1. **The face.** Candidate faces are those whose boundary box, grown by `max_distance_mm`, meets the
-//!    hole's. For each, the Coons patch of its Q' (`surface::face_patch`: the four smallest-angle
-//!    vertices, pseudo-corners at side midpoints for faces of fewer than four sides) and the foot point of
-//!    the hole's arc-length centroid C̄ (`surface::foot_point`: grid guess then hybrid Newton). Candidates
-//!    are tried nearest first; the first whose patch holds every hole point's foot point strictly inside
-//!    (0, 1)² and within `max_distance_mm` is the face.
+//!    hole's. Each gets the Coons patch of its Q' (`surface::face_patch`: the four smallest-angle
+//!    vertices, pseudo-corners at side midpoints for faces of fewer than four sides). Those whose box
+//!    holds the hole's arc-length centroid C̄ are tried first, ordered by the distance of C̄'s foot point
+//!    (`surface::foot_point`: grid guess then hybrid Newton); then the others by the distance from C̄ to
+//!    their box. The first whose patch holds every hole point's foot point strictly inside (0, 1)² and
+//!    within `max_distance_mm` is the face.
 //! 2. **The hole in the domain.** Each hole point's foot point (warm-started from the previous one, the
 //!    grid guess where that ends on the domain's border) gives the hole as a polygon in (u, v); it is
 //!    oriented counter-clockwise like the face loop, and (ū, v̄) must lie inside it.
@@ -174,27 +175,44 @@ pub(super) fn plan(net: &Network, pts: &[P3], options: &HoleOptions) -> Result<P
         max_iterations: options.newton_iterations.max(1),
         ..FootPointOptions::default()
     };
-    // Candidate faces with their patch and the centroid's foot point, nearest first.
-    let mut cands: Vec<(f64, FaceId, FacePatch)> = Vec::new();
+    // Candidate faces by the distance from C̄ to their boundary box (within the distance limit).
+    let box_gap = |(lo, hi): (P3, P3)| {
+        let d: f64 = (0..3)
+            .map(|k| (lo[k] - c[k]).max(c[k] - hi[k]).max(0.0).powi(2))
+            .sum();
+        d.sqrt()
+    };
+    let mut by_box: Vec<(f64, FaceId)> = Vec::new();
     for (f, _) in net.faces() {
         let fp = net.face_points(f);
-        if fp.is_empty() || !boxes_overlap(hole_box, bbox(&fp), limit) {
+        if fp.is_empty() {
             continue;
         }
-        let Some(sides) = face_sides(net, f) else {
-            continue;
-        };
-        let Ok(patch) = face_patch(&sides, options.tangent_fraction) else {
-            continue;
-        };
-        let d = FootPointSolver::new(&patch.patch, &foot)
-            .solve(v3(c))
-            .distance;
-        cands.push((d, f, patch));
+        let b = bbox(&fp);
+        if boxes_overlap(hole_box, b, limit) {
+            by_box.push((box_gap(b), f));
+        }
     }
-    cands.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    by_box.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    // The faces whose box holds C̄ are tried first, nearest patch first; then the others by box distance.
+    let holding = by_box.iter().take_while(|x| x.0 == 0.0).count();
+    let patch_of = |f: FaceId| {
+        face_sides(net, f).and_then(|sides| face_patch(&sides, options.tangent_fraction).ok())
+    };
+    let mut first: Vec<(f64, FaceId, FacePatch)> = by_box[..holding]
+        .iter()
+        .filter_map(|&(_, f)| {
+            let p = patch_of(f)?;
+            let d = FootPointSolver::new(&p.patch, &foot).solve(v3(c)).distance;
+            Some((d, f, p))
+        })
+        .collect();
+    first.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let rest = by_box[holding..]
+        .iter()
+        .filter_map(|&(d, f)| patch_of(f).map(|p| (d, f, p)));
     let mut nearest = f64::INFINITY;
-    for (_, f, fpatch) in &cands {
+    for (_, f, fpatch) in first.into_iter().chain(rest) {
         let solver = FootPointSolver::new(&fpatch.patch, &foot);
         let proj = match project(&solver, pts, limit) {
             Ok(p) => p,
@@ -203,7 +221,7 @@ pub(super) fn plan(net: &Network, pts: &[P3], options: &HoleOptions) -> Result<P
                 continue;
             }
         };
-        return spokes(net, *f, fpatch, &solver, pts, c, proj, options);
+        return spokes(net, f, &fpatch, &solver, pts, c, proj, options);
     }
     Err(refuse(
         HoleRule::InsideOneFace,
