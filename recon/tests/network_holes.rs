@@ -470,7 +470,11 @@ fn random_holes_keep_the_invariants_and_the_bookkeeping() {
         match hole(&mut net, &ring(cx, cy, r, 80, rng.unit() < 0.5)) {
             Ok(rep) => {
                 let t = net.topology();
-                assert_eq!(t.genus, 0, "hole ({cx}, {cy}) r {r}: {:?}\n{before:?}\n{t:?}", rep.kind);
+                assert_eq!(
+                    t.genus, 0,
+                    "hole ({cx}, {cy}) r {r}: {:?}\n{before:?}\n{t:?}",
+                    rep.kind
+                );
                 match rep.kind {
                     HoleKind::Spokes { sides, .. } => {
                         let n = sides as i64;

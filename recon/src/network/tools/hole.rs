@@ -17,7 +17,7 @@
 
 use std::fmt;
 
-use super::crossings::{arcs, find_hits, gap, nearest_point};
+use super::crossings::{arcs, find_hits, gap};
 use super::{widened_m, CurveInput, InsertOptions, ToolError};
 use crate::network::geom::P3;
 use crate::network::mesh::Network;
@@ -194,21 +194,19 @@ pub fn create_hole(
         let plan = super::hole_spokes::plan(net, &pts, options)?;
         return net.transact(|net| super::hole_spokes::apply(net, &plan, curve.stroke));
     }
-    // Crossings: start the loop at its point farthest from the network (capped), so no meeting point
-    // straddles the loop's seam.
-    let cap = widened_m(
-        options.insert.snap_mm,
-        curve.sigma_mm,
-        options.insert.sigma_factor,
-    ) + thr;
-    let mut start = 0;
-    let mut far = -1.0;
-    for (i, p) in pts.iter().enumerate() {
-        let d = nearest_point(net, *p, cap).map_or(cap, |h| h.distance);
-        if d > far + 1e-12 {
-            (start, far) = (i, d);
+    // Crossings: start the loop in the middle of the longest stretch between two meeting points, so no
+    // approach to the network straddles the loop's seam.
+    let arc = arcs(&closed);
+    let total = arc[arc.len() - 1];
+    let mut sig: Vec<f64> = hits.iter().map(|h| h.sigma).collect();
+    sig.push(sig[0] + total);
+    let (mut best, mut mid) = (-1.0, 0.0);
+    for w in sig.windows(2) {
+        if w[1] - w[0] > best {
+            (best, mid) = (w[1] - w[0], ((w[0] + w[1]) / 2.0).rem_euclid(total));
         }
     }
+    let start = arc.partition_point(|&s| s < mid).min(pts.len() - 1);
     let mut rotated: Vec<P3> = pts[start..].iter().chain(&pts[..start]).copied().collect();
     rotated.push(rotated[0]);
     let (hits, _) = find_hits(net, &rotated, &arcs(&rotated), thr, 0.0);
