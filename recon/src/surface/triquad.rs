@@ -7,7 +7,7 @@
 //!    along each polyline, see [`TriquadOptions::tangent_fraction`]), signed in the face's least-squares
 //!    plane so reflex corners measure more than π; ties go to the lower loop index. Its sides concatenate
 //!    the polylines between consecutive corners, and each vertex of the face gets (u, v) on Q''s border
-//!    from the chord length along its side.
+//!    from the chord length along its side (face_patch.rs, shared with hole creation).
 //! 2. **Greedy planarity splitting** (§6.1.1): among the runs of four consecutive vertices of the
 //!    remaining polygon (excluding runs whose four vertices lie on one side of Q', and cuts between vertices
 //!    already joined by an edge), cut off the quad whose least-squares plane (over its polylines' points)
