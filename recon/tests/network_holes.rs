@@ -528,3 +528,109 @@ fn bench_hole_on_100_faces() {
         );
     }
 }
+
+#[test]
+fn foot_points_on_a_curved_patch_are_local_minima() {
+    // Four circular arcs (piecewise-linear sides with many knots) bounding a dome-like patch.
+    let arc = |a0: f64, a1: f64, z: f64| -> Vec<Vec3> {
+        (0..=40)
+            .map(|i| {
+                let a = a0 + (a1 - a0) * i as f64 / 40.0;
+                Vec3::new(a.cos(), a.sin(), z + 0.3 * (2.0 * a).cos())
+            })
+            .collect()
+    };
+    let q = PI / 2.0;
+    let patch = CoonsPatch::from_loop([
+        arc(-q * 1.5, -q * 0.5, 0.0),
+        arc(-q * 0.5, q * 0.5, 0.0),
+        arc(q * 0.5, q * 1.5, 0.0),
+        arc(q * 1.5, q * 2.5, 0.0),
+    ]);
+    let solver = FootPointSolver::new(&patch, &FootPointOptions::default());
+    let mut rng = Rng(0xc00e_5002);
+    let mut most = 0;
+    for _ in 0..300 {
+        let (u0, v0) = (rng.range(0.05, 0.95), rng.range(0.05, 0.95));
+        let c = patch.eval(u0, v0) + Vec3::new(rng.range(-0.05, 0.05), rng.range(-0.05, 0.05), 0.1);
+        let f = solver.solve(c);
+        most = most.max(f.iterations);
+        assert!(f.converged, "({u0}, {v0}) -> {f:?}");
+        assert!(((patch.eval(f.u, f.v) - c).norm() - f.distance).abs() < 1e-15);
+        // No nearby parameter is closer (by more than rounding).
+        for (du, dv) in [(1e-4, 0.0), (-1e-4, 0.0), (0.0, 1e-4), (0.0, -1e-4)] {
+            let (u, v) = ((f.u + du).clamp(0.0, 1.0), (f.v + dv).clamp(0.0, 1.0));
+            let d = (patch.eval(u, v) - c).norm();
+            assert!(
+                d >= f.distance - 1e-12,
+                "{f:?}: ({du}, {dv}) is {:e} closer",
+                f.distance - d
+            );
+        }
+    }
+    // A minimum on a knot line (a kink) takes the 2-D iterations, then the 1-D ones on the line.
+    println!("curved patch: most Newton iterations {most}");
+}
+
+#[test]
+fn a_hole_in_a_saddle_shaped_face() {
+    // A boundary on the saddle z = Z + h (x²/R² − y²/B²); the hole drawn on the saddle.
+    let h = 0.02;
+    let saddle = |x: f64, y: f64| Z + h * ((x / R).powi(2) - (y / B).powi(2));
+    let boundary: Vec<[f64; 3]> = circle(400)
+        .into_iter()
+        .map(|p| [p[0], p[1], saddle(p[0], p[1])])
+        .collect();
+    let mut net = Network::new();
+    insert_boundary(
+        &mut net,
+        CurveInput::new(&boundary),
+        &BoundaryOptions::default(),
+    )
+    .unwrap();
+    let drawn: Vec<[f64; 3]> = ring(0.01, -0.01, 0.03, 120, true)
+        .into_iter()
+        .map(|p| [p[0], p[1], saddle(p[0], p[1])])
+        .collect();
+    let rep = hole(&mut net, &drawn).unwrap();
+    let HoleKind::Spokes {
+        sides,
+        max_distance_mm,
+        newton_iterations,
+        ..
+    } = rep.kind
+    else {
+        panic!("expected spokes")
+    };
+    println!("saddle: hole ≤ {max_distance_mm:.3} mm from the Coons patch, ≤ {newton_iterations} Newton iterations");
+    assert_eq!(sides, 2);
+    assert!(max_distance_mm > 0.0 && max_distance_mm < 5.0);
+    let t = net.topology();
+    assert_eq!(
+        (t.vertices, t.edges, t.faces, t.boundaries, t.genus),
+        (4, 6, 2, 2, 0)
+    );
+    // The spokes run from a boundary vertex to a point of the drawn hole, near the saddle.
+    for &e in &rep.spokes {
+        let p = &net.edge_polyline(e).unwrap().points;
+        let end = p[p.len() - 1];
+        assert!(drawn.windows(2).any(|w| {
+            let (a, b) = (w[0], w[1]);
+            let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let ap = [end[0] - a[0], end[1] - a[1], end[2] - a[2]];
+            let l2 = ab.iter().map(|x| x * x).sum::<f64>();
+            let t = (ab.iter().zip(&ap).map(|(x, y)| x * y).sum::<f64>() / l2).clamp(0.0, 1.0);
+            (0..3)
+                .map(|k| (ap[k] - t * ab[k]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+                < 1e-12
+        }));
+        for q in p {
+            assert!(
+                (q[2] - saddle(q[0], q[1])).abs() < 0.005,
+                "spoke off the saddle"
+            );
+        }
+    }
+}

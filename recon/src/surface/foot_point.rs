@@ -13,11 +13,14 @@
 //! parameters of its projection onto the border. The initial guess is the nearest sample of a regular grid
 //! over the domain (the thesis's rule; the grid size is ours, [`FootPointOptions::grid`]).
 //!
+//! The sides are piecewise linear, so x_u and x_v jump across knot lines; a solve that stalls there
+//! (Newton zig-zagging over a kink) is finished on the nearest knot line with that parameter held.
+//!
 //! [`FootPointSolver`] precomputes the grid once per patch; each [`FootPointSolver::solve`] is then a grid
 //! scan and a few Newton steps. On a bilinear patch (straight sides) the Hessian is exact and the solve
 //! converges quadratically to the exact foot point.
 
-use super::coons::CoonsPatch;
+use super::coons::{CoonsPatch, Side};
 use crate::geometry::Vec3;
 
 /// Options of the foot-point solve.
@@ -107,21 +110,72 @@ impl<'a> FootPointSolver<'a> {
                 0.0
             }
         };
-        let (mut u, mut v) = (clamp(u0), clamp(v0));
+        let (u, v) = (clamp(u0), clamp(v0));
+        let mut best = self.iterate(c, u, v, [false; 2], self.options.max_iterations);
+        if !best.3 {
+            // Stalled by a kink: the sides are piecewise linear, so x_u, x_v jump across the knot lines
+            // and a minimum on one makes Newton zig-zag over it. Retry on the nearest knot line of each
+            // parameter with that parameter fixed (a smooth 1-D problem) and keep the better point.
+            let near_knot = |x: f64, a: &Side, b: &Side| {
+                a.knots()
+                    .iter()
+                    .chain(b.knots())
+                    .copied()
+                    .min_by(|p, q| (p - x).abs().total_cmp(&(q - x).abs()))
+                    .filter(|k| (k - x).abs() < 1e-6)
+            };
+            let p = self.patch;
+            let tries = [
+                near_knot(best.1, p.left(), p.right()).map(|k| (best.0, k, [false, true])),
+                near_knot(best.0, p.bottom(), p.top()).map(|k| (k, best.1, [true, false])),
+            ];
+            let mut used = best.4;
+            for (tu, tv, fixed) in tries.into_iter().flatten() {
+                let r = self.iterate(c, tu, tv, fixed, self.options.max_iterations);
+                used += r.4;
+                if r.3 && r.2 <= best.2 * (1.0 + 1e-10) + f64::MIN_POSITIVE {
+                    best = r;
+                }
+            }
+            best.4 = used;
+        }
+        let (u, v, _, converged, iterations) = best;
+        let point = self.patch.eval(u, v);
+        FootPoint {
+            u,
+            v,
+            point,
+            distance: (point - c).norm(),
+            iterations,
+            converged,
+        }
+    }
+
+    /// Newton iterations from (u, v) with the `fixed` parameters held: (u, v, f, converged, iterations).
+    fn iterate(
+        &self,
+        c: Vec3,
+        mut u: f64,
+        mut v: f64,
+        fixed: [bool; 2],
+        max_iterations: usize,
+    ) -> (f64, f64, f64, bool, usize) {
+        let clamp = |x: f64| x.clamp(0.0, 1.0);
         let f = |u: f64, v: f64| 0.5 * (self.patch.eval(u, v) - c).norm_squared();
         let mut fu = f(u, v);
         let mut converged = false;
         let mut iterations = 0;
-        while iterations < self.options.max_iterations {
+        while iterations < max_iterations {
             iterations += 1;
             let [x, xu, xv, xuv] = self.patch.eval_derivatives(u, v);
             let r = x - c;
             let g = [r.dot(xu), r.dot(xv)];
-            // The gradient projected onto the feasible directions at a clamped parameter.
+            // The gradient projected onto the feasible directions at a clamped or fixed parameter.
             let free = |x: f64, gx: f64| !((x <= 0.0 && gx > 0.0) || (x >= 1.0 && gx < 0.0));
+            let hold = [fixed[0] || !free(u, g[0]), fixed[1] || !free(v, g[1])];
             let gp = [
-                if free(u, g[0]) { g[0] } else { 0.0 },
-                if free(v, g[1]) { g[1] } else { 0.0 },
+                if hold[0] { 0.0 } else { g[0] },
+                if hold[1] { 0.0 } else { g[1] },
             ];
             let scale = xu.norm_squared() + xv.norm_squared();
             if gp[0].hypot(gp[1]) <= 1e-300 || scale <= 0.0 {
@@ -133,9 +187,14 @@ impl<'a> FootPointSolver<'a> {
                 [gn[0][0], gn[0][1] + r.dot(xuv)],
                 [gn[1][0] + r.dot(xuv), gn[1][1]],
             ];
-            let step = solve_spd(newton, g)
-                .or_else(|| solve_spd(gn, g))
-                .unwrap_or([-g[0] / scale, -g[1] / scale]);
+            let step = match hold {
+                [false, false] => solve_spd(newton, g)
+                    .or_else(|| solve_spd(gn, g))
+                    .unwrap_or([-g[0] / scale, -g[1] / scale]),
+                [true, false] => [0.0, -g[1] / gn[1][1].max(f64::MIN_POSITIVE)],
+                [false, true] => [-g[0] / gn[0][0].max(f64::MIN_POSITIVE), 0.0],
+                [true, true] => [0.0, 0.0],
+            };
             let mut lambda = 1.0;
             let mut accepted = false;
             for _ in 0..60 {
@@ -163,15 +222,7 @@ impl<'a> FootPointSolver<'a> {
                 break;
             }
         }
-        let point = self.patch.eval(u, v);
-        FootPoint {
-            u,
-            v,
-            point,
-            distance: (point - c).norm(),
-            iterations,
-            converged,
-        }
+        (u, v, fu, converged, iterations)
     }
 
     /// The norm of the gradient of ½‖x − C‖² at (u, v).
