@@ -297,6 +297,12 @@ fn refused_holes_name_their_rule_and_change_nothing() {
     assert_eq!(e.rule(), "hole is convex");
     // And the network still takes a good hole.
     hole(&mut net, &ring(0.0, 0.0, 0.03, 120, true)).unwrap();
+    // A cut that snaps onto a vertex of an earlier hole's border (1.5 mm from it) after crossing that
+    // hole's spoke: refused inside the transaction, after the splits and the removal, and rolled back.
+    let mut net = disc();
+    hole(&mut net, &ring(-0.04, 0.0, 0.02, 100, true)).unwrap();
+    let e = hole(&mut net, &ring(0.0, 0.0, 0.0185, 100, true)).unwrap_err();
+    assert_eq!(e.rule(), "hole keeps clear of the border", "{e}");
 }
 
 #[test]
