@@ -192,7 +192,7 @@ fn report_crossings_of_last(net: &Network, before: &Network) -> usize {
 #[test]
 fn pen_modes_choose_the_tool() {
     // Mode 2 (mirror): half an outline becomes the closed boundary; mode 1 (sharp): an insertion tagged
-    // sharp; mode 3 (hole, not implemented): reported.
+    // sharp; mode 6 (no tool): reported.
     let half: Vec<[f64; 3]> = (0..=100)
         .map(|i| {
             let a = std::f64::consts::PI * i as f64 / 100.0;
@@ -213,7 +213,7 @@ fn pen_modes_choose_the_tool() {
             )
         },
         StrokeInput {
-            mode: 3,
+            mode: 6,
             ..stroke(
                 2,
                 chord(10f64.to_radians(), 200f64.to_radians(), 0.0),

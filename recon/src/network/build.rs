@@ -1,5 +1,5 @@
 //! Strokes in, network out, without a journal: the first closed stroke is the boundary and every other
-//! stroke a curve insertion. The thesis needs the strokes in a strict order; we do not: a stroke that
+//! stroke a curve insertion (or the tool its pen mode selects, [`PenMode`]). The thesis needs the strokes in a strict order; we do not: a stroke that
 //! breaks a rule now is retried after the strokes that follow it, pass after pass, until a pass uses no
 //! stroke. Each stroke that is never used is reported with the rule and the distance that failed.
 //!
@@ -12,8 +12,8 @@ use serde::{Deserialize, Serialize};
 use super::journal::{Journal, Step};
 use super::mesh::Network;
 use super::tools::{
-    insert_boundary, insert_curve, mirror_curve, tag_sharp, Adjustment, BoundaryOptions,
-    CurveInput, InsertOptions, ToolError,
+    create_hole, insert_boundary, insert_curve, mirror_curve, tag_sharp, Adjustment,
+    BoundaryOptions, CurveInput, HoleOptions, InsertOptions, ToolError,
 };
 use super::topology::Topology;
 
@@ -42,7 +42,7 @@ pub enum PenMode {
     Sharp,
     /// 2: mirroring; the mirrored closed curve is the boundary (or, after it, an insertion).
     Mirror,
-    /// 3: hole creation (not yet implemented: reported).
+    /// 3: hole creation (`create_hole`): the closed stroke bounds a hole (never the boundary).
     Hole,
     /// 4: border gluing (not yet implemented: reported).
     Glue,
@@ -147,7 +147,7 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
     let mut prepared: Vec<StrokeInput> = Vec::with_capacity(strokes.len());
     for s in strokes {
         match PenMode::from_mode(s.mode) {
-            PenMode::Insert | PenMode::Sharp => prepared.push(s.clone()),
+            PenMode::Insert | PenMode::Sharp | PenMode::Hole => prepared.push(s.clone()),
             PenMode::Mirror => match mirror_curve(&s.points) {
                 Ok(m) => prepared.push(StrokeInput {
                     points: m.points,
@@ -163,9 +163,15 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
     }
     let strokes = &prepared[..];
     let mirror = |s: &StrokeInput| PenMode::from_mode(s.mode) == PenMode::Mirror;
+    let hole = |s: &StrokeInput| PenMode::from_mode(s.mode) == PenMode::Hole;
+    // Holes take the insertion thresholds; their other settings are the defaults.
+    let hole_options = HoleOptions {
+        insert: options.insert.clone(),
+        ..HoleOptions::default()
+    };
     let mut pending: Vec<(usize, Option<ToolError>)> = Vec::new();
     for (k, s) in strokes.iter().enumerate() {
-        if report.boundary.is_none() && s.closed {
+        if report.boundary.is_none() && s.closed && !hole(s) {
             match insert_boundary(&mut net, curve(s), &boundary_options) {
                 Ok(_) => {
                     report.journal.steps.push(Step::Boundary {
@@ -191,6 +197,23 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
             let mut progress = false;
             pending.retain_mut(|(k, last)| {
                 let s = &strokes[*k];
+                if hole(s) {
+                    return match create_hole(&mut net, curve(s), &hole_options) {
+                        Ok(_) => {
+                            report.journal.steps.push(Step::Hole {
+                                stroke: s.id,
+                                options: hole_options.clone(),
+                            });
+                            report.used.push(s.id);
+                            progress = true;
+                            false
+                        }
+                        Err(e) => {
+                            *last = Some(e);
+                            true
+                        }
+                    };
+                }
                 match insert_curve(&mut net, curve(s), &options.insert) {
                     Ok((r, _)) => {
                         report.journal.steps.push(Step::Insert {

@@ -46,6 +46,25 @@ impl Side {
         self.points[j - 1] * (1.0 - w) + self.points[j] * w
     }
 
+    /// The derivative d/dt at parameter `t` (piecewise constant: the slope of the knot span holding `t`,
+    /// the span to the right at a knot, the last non-empty span at `t` ≥ 1; zero for a zero-length side).
+    pub fn derivative(&self, t: f64) -> Vec3 {
+        let n = self.points.len();
+        if n < 2 {
+            return Vec3::ZERO;
+        }
+        let mut j = self.knots.partition_point(|&k| k <= t).clamp(1, n - 1);
+        while j > 1 && self.knots[j] <= self.knots[j - 1] {
+            j -= 1;
+        }
+        let (k0, k1) = (self.knots[j - 1], self.knots[j]);
+        if k1 > k0 {
+            (self.points[j] - self.points[j - 1]) / (k1 - k0)
+        } else {
+            Vec3::ZERO
+        }
+    }
+
     /// The knots (chord-length parameters of the points, 0 to 1).
     pub fn knots(&self) -> &[f64] {
         &self.knots
@@ -164,6 +183,29 @@ impl CoonsPatch {
             + p01 * ((1.0 - u) * v)
             + p11 * (u * v);
         ruled_v + ruled_u - bilinear
+    }
+
+    /// The point and its derivatives at (u, v): `[x, x_u, x_v, x_uv]`. The sides are piecewise linear, so
+    /// within a knot cell x_uu = x_vv = 0 and these are all the second derivatives there.
+    pub fn eval_derivatives(&self, u: f64, v: f64) -> [Vec3; 4] {
+        let [p00, p10, p01, p11] = self.corners;
+        let (b, t, l, r) = (
+            self.bottom.at(u),
+            self.top.at(u),
+            self.left.at(v),
+            self.right.at(v),
+        );
+        let (db, dt, dl, dr) = (
+            self.bottom.derivative(u),
+            self.top.derivative(u),
+            self.left.derivative(v),
+            self.right.derivative(v),
+        );
+        let x = self.eval(u, v);
+        let xu = db * (1.0 - v) + dt * v - l + r - ((p10 - p00) * (1.0 - v) + (p11 - p01) * v);
+        let xv = t - b + dl * (1.0 - u) + dr * u - ((p01 - p00) * (1.0 - u) + (p11 - p10) * u);
+        let xuv = dt - db + dr - dl - (p11 - p10 - p01 + p00);
+        [x, xu, xv, xuv]
     }
 
     /// The side x(u, 0).

@@ -7,7 +7,7 @@
 //!    along each polyline, see [`TriquadOptions::tangent_fraction`]), signed in the face's least-squares
 //!    plane so reflex corners measure more than π; ties go to the lower loop index. Its sides concatenate
 //!    the polylines between consecutive corners, and each vertex of the face gets (u, v) on Q''s border
-//!    from the chord length along its side.
+//!    from the chord length along its side (face_patch.rs, shared with hole creation).
 //! 2. **Greedy planarity splitting** (§6.1.1): among the runs of four consecutive vertices of the
 //!    remaining polygon (excluding runs whose four vertices lie on one side of Q', and cuts between vertices
 //!    already joined by an edge), cut off the quad whose least-squares plane (over its polylines' points)
@@ -19,11 +19,10 @@
 //!    face's polylines (at least [`TriquadOptions::min_segments`] segments). Each becomes a [`Curve`] with
 //!    `generated = true`, not sharp.
 
-use nalgebra::{Matrix3, SymmetricEigen, Vector3};
-
 use super::control::{ControlMesh, Curve};
-use super::coons::{chord_params, halfedge_polyline, CoonsPatch, Side};
+use super::coons::halfedge_polyline;
 use super::error::SurfaceError;
+use super::face_patch::{face_patch, lsq_normal, newell, FacePatch};
 use super::from_network::Builder;
 use crate::geometry::Vec3;
 
@@ -43,55 +42,6 @@ impl Default for TriquadOptions {
             tangent_fraction: 0.05,
             min_segments: 2,
         }
-    }
-}
-
-/// The unit normal of the least-squares plane of `pts`, oriented like the loop's Newell normal `hint`.
-pub(crate) fn lsq_normal(pts: &[Vec3], hint: Vec3) -> Option<Vec3> {
-    if pts.len() < 3 {
-        return None;
-    }
-    let n = pts.len() as f64;
-    let c = pts.iter().fold(Vec3::ZERO, |a, &p| a + p) / n;
-    let mut m = Matrix3::zeros();
-    for p in pts {
-        let d = Vector3::new(p.x - c.x, p.y - c.y, p.z - c.z);
-        m += d * d.transpose();
-    }
-    let eig = SymmetricEigen::new(m);
-    let (mut k, mut best) = (0, f64::INFINITY);
-    for i in 0..3 {
-        if eig.eigenvalues[i] < best {
-            best = eig.eigenvalues[i];
-            k = i;
-        }
-    }
-    let col = eig.eigenvectors.column(k);
-    let nrm = Vec3::new(col[0], col[1], col[2]).try_normalize()?;
-    Some(if nrm.dot(hint) < 0.0 { -nrm } else { nrm })
-}
-
-/// The Newell normal (twice the vector area) of the closed loop `pts`.
-pub(crate) fn newell(pts: &[Vec3]) -> Vec3 {
-    let n = pts.len();
-    let mut a = Vec3::ZERO;
-    for i in 0..n {
-        a += pts[i].cross(pts[(i + 1) % n]);
-    }
-    a
-}
-
-/// The interior angle at a vertex between the incoming polyline `inc` (ending there) and the outgoing
-/// `out` (starting there), signed about `normal`, in [0, 2π).
-fn interior_angle(inc: &Side, out: &Side, normal: Vec3, frac: f64) -> f64 {
-    let v = out.first();
-    let d_in = inc.at(1.0 - frac) - v;
-    let d_out = out.at(frac) - v;
-    let a = normal.dot(d_out.cross(d_in)).atan2(d_out.dot(d_in));
-    if a < 0.0 {
-        a + std::f64::consts::TAU
-    } else {
-        a
     }
 }
 
@@ -123,59 +73,13 @@ fn split_face(
 ) -> Result<(), String> {
     let n = verts.len();
     let corners_pos: Vec<Vec3> = verts.iter().map(|&v| b.points[v]).collect();
-    let all: Vec<Vec3> = sides
-        .iter()
-        .flat_map(|s| s[..s.len() - 1].iter().copied())
-        .collect();
-    let hint = newell(&all);
-    let normal = lsq_normal(&all, hint).ok_or("its points span no plane")?;
-    // 1. Q': the four smallest interior angles.
-    let side_obj: Vec<Side> = sides.iter().map(|s| Side::new(s.clone())).collect();
-    let frac = opts.tangent_fraction.clamp(1e-6, 0.5);
-    let mut order: Vec<(f64, usize)> = (0..n)
-        .map(|k| {
-            let inc = &side_obj[(k + n - 1) % n];
-            (interior_angle(inc, &side_obj[k], normal, frac), k)
-        })
-        .collect();
-    order.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-    let mut c: Vec<usize> = order[..4].iter().map(|x| x.1).collect();
-    c.sort_unstable();
-    // Q' sides and the (u, v) of every vertex.
-    let mut qsides: Vec<Vec<Vec3>> = Vec::with_capacity(4);
-    let mut uv = vec![(0.0, 0.0); n];
-    let mut on_side: Vec<[bool; 4]> = vec![[false; 4]; n];
-    for j in 0..4 {
-        let (start, end) = (c[j], c[(j + 1) % 4]);
-        let count = (end + n - start) % n;
-        let mut pts: Vec<Vec3> = Vec::new();
-        let mut at_vertex = Vec::with_capacity(count + 1);
-        for i in 0..count {
-            let s = &sides[(start + i) % n];
-            at_vertex.push(pts.len());
-            pts.extend_from_slice(&s[..s.len() - 1]);
-        }
-        at_vertex.push(pts.len());
-        pts.push(corners_pos[end]);
-        let kn = chord_params(&pts);
-        for (i, &ix) in at_vertex.iter().enumerate() {
-            let k = (start + i) % n;
-            on_side[k][j] = true;
-            if i == count {
-                continue; // the next side's corner
-            }
-            let t = kn[ix];
-            uv[k] = match j {
-                0 => (t, 0.0),
-                1 => (1.0, t),
-                2 => (1.0 - t, 1.0),
-                _ => (0.0, 1.0 - t),
-            };
-        }
-        qsides.push(pts);
-    }
-    let [q0, q1, q2, q3]: [Vec<Vec3>; 4] = qsides.try_into().map_err(|_| "no Q'")?;
-    let patch = CoonsPatch::from_loop([q0, q1, q2, q3]);
+    // 1. Q' and its Coons patch (face_patch.rs).
+    let FacePatch {
+        patch,
+        uv,
+        on_side,
+        normal,
+    } = face_patch(sides, opts.tangent_fraction)?;
     // Sample spacing of the face's polylines.
     let (len, segs) = sides.iter().fold((0.0, 0usize), |(l, s), p| {
         let pl: f64 = p.windows(2).map(|w| (w[1] - w[0]).norm()).sum();

@@ -86,6 +86,16 @@ pub enum ToolError {
         /// The mode value (`buttons >> 1`).
         mode: u8,
     },
+    /// Hole creation (FIRES thesis §5.2.2) refused the closed curve.
+    #[error("rule \"{}\": {detail}", rule.name())]
+    Hole {
+        /// The hole rule that failed.
+        rule: super::hole::HoleRule,
+        /// What failed, with the numbers.
+        detail: String,
+        /// The distance that failed, mm, where there is one.
+        distance_mm: Option<f64>,
+    },
 }
 
 impl ToolError {
@@ -100,6 +110,7 @@ impl ToolError {
             ToolError::NoSuchStroke { .. } => "stroke exists",
             ToolError::CannotDelete { .. } => "delete merges two faces",
             ToolError::NoToolForMode { .. } => "pen mode has a tool",
+            ToolError::Hole { rule, .. } => rule.name(),
         }
     }
 
@@ -109,6 +120,7 @@ impl ToolError {
             ToolError::NotClosed { gap_mm, .. } => Some(*gap_mm),
             ToolError::EndNotOnNetwork { distance_mm, .. } => Some(*distance_mm),
             ToolError::NoCommonFace { threshold_mm, .. } => Some(*threshold_mm),
+            ToolError::Hole { distance_mm, .. } => *distance_mm,
             _ => None,
         }
     }

@@ -7,6 +7,9 @@ mod boundary;
 mod crossings;
 mod delete;
 mod error;
+mod hole;
+mod hole_cut;
+mod hole_spokes;
 mod insert;
 mod mirror;
 mod sharp;
@@ -16,6 +19,7 @@ pub use align::{align_curves, quaternion_matrix, transform_network, AlignOptions
 pub use boundary::{insert_boundary, BoundaryOptions, BoundaryReport};
 pub use delete::{delete_stroke, DeleteReport};
 pub use error::{End, ToolError};
+pub use hole::{create_hole, HoleKind, HoleOptions, HoleReport, HoleRule};
 pub use insert::{insert_curve, Adjustment, InsertOptions, InsertReport};
 pub use mirror::{mirror_curve, Mirrored};
 pub use sharp::tag_sharp;
