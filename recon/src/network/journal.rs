@@ -8,8 +8,8 @@ use serde::{Deserialize, Serialize};
 use super::build::StrokeInput;
 use super::mesh::Network;
 use super::tools::{
-    delete_stroke, insert_boundary, insert_curve, mirror_curve, tag_sharp, BoundaryOptions,
-    CurveInput, InsertOptions, ToolError,
+    close_boundary, delete_stroke, insert_boundary, insert_curve, mirror_curve, tag_sharp,
+    BoundaryOptions, CloseOptions, CurveInput, InsertOptions, ToolError,
 };
 
 /// The `format` value of a journal.
@@ -52,6 +52,14 @@ pub enum Step {
         stroke: u32,
         /// 0 (smooth) .. 1 (sharp).
         sharpness: f64,
+    },
+    /// Mesh closure: a face on the boundary loop both ends of the stroke lie on.
+    Close {
+        /// The locating stroke (not inserted by this step).
+        stroke: u32,
+        /// Snapping distance.
+        #[serde(default)]
+        options: CloseOptions,
     },
 }
 
@@ -111,7 +119,9 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
     let mut net = Network::new();
     for (step, s) in journal.steps.iter().enumerate() {
         let id = match s {
-            Step::Boundary { stroke, .. } | Step::Insert { stroke, .. } => *stroke,
+            Step::Boundary { stroke, .. }
+            | Step::Insert { stroke, .. }
+            | Step::Close { stroke, .. } => *stroke,
             Step::Delete { stroke } => {
                 delete_stroke(&mut net, *stroke)
                     .map_err(|error| JournalError::Refused { step, error })?;
@@ -150,6 +160,7 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
             )
             .map(|_| ()),
             Step::Insert { options, .. } => insert_curve(&mut net, curve, options).map(|_| ()),
+            Step::Close { options, .. } => close_boundary(&mut net, curve, options).map(|_| ()),
             Step::Delete { .. } | Step::Sharp { .. } => Ok(()),
         };
         r.map_err(|error| JournalError::Refused { step, error })?;

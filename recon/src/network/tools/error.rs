@@ -2,7 +2,7 @@
 
 use std::fmt;
 
-use crate::network::EdgeId;
+use crate::network::{EdgeId, VertexId};
 
 /// Which end of a curve.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -86,6 +86,36 @@ pub enum ToolError {
         /// The mode value (`buttons >> 1`).
         mode: u8,
     },
+    /// An end of a closure, gluing or skinning curve is not on a boundary edge.
+    #[error("rule \"ends on a boundary\": the {end} is {distance_mm:.2} mm from the nearest boundary edge (limit {limit_mm:.2} mm)")]
+    NotOnBoundary {
+        /// Which end.
+        end: End,
+        /// Distance to the nearest boundary point (infinite when there is no boundary).
+        distance_mm: f64,
+        /// The snapping distance used.
+        limit_mm: f64,
+    },
+    /// An edge that should be on a boundary loop is not (it has two faces, or none).
+    #[error("rule \"boundary edge\": edge {edge} is not on a boundary loop")]
+    NotABoundaryEdge {
+        /// The edge.
+        edge: EdgeId,
+    },
+    /// Two boundary loops touch at a vertex, so the loop through it is ambiguous.
+    #[error("rule \"simple boundary loop\": two boundary loops touch at vertex {vertex}")]
+    PinchedBoundary {
+        /// The vertex.
+        vertex: VertexId,
+    },
+    /// Closure needs both ends on one loop.
+    #[error("rule \"one boundary loop\": the ends lie on two different boundary loops (edges {first} and {second})")]
+    DifferentBoundaries {
+        /// An edge of the first end's loop.
+        first: EdgeId,
+        /// An edge of the second end's loop.
+        second: EdgeId,
+    },
 }
 
 impl ToolError {
@@ -100,6 +130,10 @@ impl ToolError {
             ToolError::NoSuchStroke { .. } => "stroke exists",
             ToolError::CannotDelete { .. } => "delete merges two faces",
             ToolError::NoToolForMode { .. } => "pen mode has a tool",
+            ToolError::NotOnBoundary { .. } => "ends on a boundary",
+            ToolError::NotABoundaryEdge { .. } => "boundary edge",
+            ToolError::PinchedBoundary { .. } => "simple boundary loop",
+            ToolError::DifferentBoundaries { .. } => "one boundary loop",
         }
     }
 
@@ -109,6 +143,7 @@ impl ToolError {
             ToolError::NotClosed { gap_mm, .. } => Some(*gap_mm),
             ToolError::EndNotOnNetwork { distance_mm, .. } => Some(*distance_mm),
             ToolError::NoCommonFace { threshold_mm, .. } => Some(*threshold_mm),
+            ToolError::NotOnBoundary { distance_mm, .. } => Some(*distance_mm),
             _ => None,
         }
     }

@@ -3,7 +3,9 @@
 //! failed and leaves the network bit for bit as it was.
 
 mod align;
+mod border;
 mod boundary;
+mod closure;
 mod crossings;
 mod delete;
 mod error;
@@ -14,6 +16,7 @@ mod skinning;
 
 pub use align::{align_curves, quaternion_matrix, transform_network, AlignOptions, Alignment};
 pub use boundary::{insert_boundary, BoundaryOptions, BoundaryReport};
+pub use closure::{close_boundary, CloseOptions, CloseReport};
 pub use delete::{delete_stroke, DeleteReport};
 pub use error::{End, ToolError};
 pub use insert::{insert_curve, Adjustment, InsertOptions, InsertReport};
