@@ -8,8 +8,8 @@ use serde::{Deserialize, Serialize};
 use super::build::StrokeInput;
 use super::mesh::Network;
 use super::tools::{
-    close_boundary, delete_stroke, insert_boundary, insert_curve, mirror_curve, tag_sharp,
-    BoundaryOptions, CloseOptions, CurveInput, InsertOptions, ToolError,
+    close_boundary, delete_stroke, glue_borders, insert_boundary, insert_curve, mirror_curve,
+    tag_sharp, BoundaryOptions, CloseOptions, CurveInput, GlueOptions, InsertOptions, ToolError,
 };
 
 /// The `format` value of a journal.
@@ -60,6 +60,14 @@ pub enum Step {
         /// Snapping distance.
         #[serde(default)]
         options: CloseOptions,
+    },
+    /// Border gluing: the marker strokes a₁ → b₁ and optionally a₂ → b₂ (not inserted).
+    Glue {
+        /// One or two stroke ids.
+        strokes: Vec<u32>,
+        /// Survivor, halves and distances.
+        #[serde(default)]
+        options: GlueOptions,
     },
 }
 
@@ -127,6 +135,35 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
                     .map_err(|error| JournalError::Refused { step, error })?;
                 continue;
             }
+            Step::Glue {
+                strokes: ids,
+                options,
+            } => {
+                let find = |id: &u32| {
+                    strokes
+                        .iter()
+                        .find(|x| x.id == *id)
+                        .ok_or(JournalError::MissingStroke { step, stroke: *id })
+                };
+                fn curve(s: &StrokeInput) -> CurveInput<'_> {
+                    CurveInput {
+                        points: &s.points,
+                        stroke: Some(s.id),
+                        sigma_mm: s.sigma_mm,
+                    }
+                }
+                let (Some(first), second) = (ids.first(), ids.get(1)) else {
+                    return Err(JournalError::Refused {
+                        step,
+                        error: ToolError::BadCurve("a glue step names no stroke".into()),
+                    });
+                };
+                let first = curve(find(first)?);
+                let second = second.map(find).transpose()?.map(curve);
+                glue_borders(&mut net, first, second, options)
+                    .map_err(|error| JournalError::Refused { step, error })?;
+                continue;
+            }
             Step::Sharp { stroke, sharpness } => {
                 tag_sharp(&mut net, *stroke, *sharpness)
                     .map_err(|error| JournalError::Refused { step, error })?;
@@ -161,7 +198,7 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
             .map(|_| ()),
             Step::Insert { options, .. } => insert_curve(&mut net, curve, options).map(|_| ()),
             Step::Close { options, .. } => close_boundary(&mut net, curve, options).map(|_| ()),
-            Step::Delete { .. } | Step::Sharp { .. } => Ok(()),
+            Step::Delete { .. } | Step::Sharp { .. } | Step::Glue { .. } => Ok(()),
         };
         r.map_err(|error| JournalError::Refused { step, error })?;
     }

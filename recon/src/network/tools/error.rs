@@ -116,6 +116,15 @@ pub enum ToolError {
         /// An edge of the second end's loop.
         second: EdgeId,
     },
+    /// Gluing one loop to itself, or half-loops, needs the second curve.
+    #[error("rule \"gluing needs two curves\": paths on one loop, or halves of two loops, need the second curve")]
+    NeedsSecondCurve,
+    /// A glued path would have no length (both ends of a path on one vertex).
+    #[error("rule \"glued paths have length\": a path to glue starts and ends on one vertex")]
+    DegenerateGluing,
+    /// The gluing curves cross, so the glued surface would not be orientable.
+    #[error("rule \"orientable gluing\": the curves cross (a Möbius band), the faces would traverse the glued curve the same way")]
+    CrossedGluing,
 }
 
 impl ToolError {
@@ -134,6 +143,9 @@ impl ToolError {
             ToolError::NotABoundaryEdge { .. } => "boundary edge",
             ToolError::PinchedBoundary { .. } => "simple boundary loop",
             ToolError::DifferentBoundaries { .. } => "one boundary loop",
+            ToolError::NeedsSecondCurve => "gluing needs two curves",
+            ToolError::DegenerateGluing => "glued paths have length",
+            ToolError::CrossedGluing => "orientable gluing",
         }
     }
 

@@ -1,0 +1,302 @@
+//! Border gluing (FIRES thesis §5.1.3, §5.2.3): a strip on a torus glued along its two θ sides is a
+//! cylinder (genus 0, 2 boundaries); its two circles glued are a torus (genus 1, no boundary); half of
+//! them glued and the rest closed is a torus too. Survivor choices (A's curve, B's, the average),
+//! validate() after every step, Euler bookkeeping, refusals that leave the network unchanged, undo/redo
+//! and journal replay.
+
+use fires_recon::network::tools::{
+    close_boundary, glue_borders, insert_boundary, insert_curve, BoundaryOptions, CloseOptions,
+    CurveInput, GlueOptions, GluePart, InsertOptions, Survivor, ToolError,
+};
+use fires_recon::network::{replay, Journal, Network, Step, StrokeInput, Topology};
+use std::f64::consts::PI;
+
+const RM: f64 = 0.1;
+const RT: f64 = 0.04;
+/// The strip leaves a gap of 0.15 rad in θ (9–21 mm) and 0.3 rad in φ (12 mm).
+const TH: f64 = 2.0 * PI - 0.15;
+const PH: f64 = 2.0 * PI - 0.3;
+
+fn torus(th: f64, ph: f64) -> [f64; 3] {
+    let r = RM + RT * ph.cos();
+    [r * th.cos(), r * th.sin(), RT * ph.sin()]
+}
+
+/// The image of the parameter segment (θ₀, φ₀) → (θ₁, φ₁), about every 2 mm.
+fn seg(a: (f64, f64), b: (f64, f64)) -> Vec<[f64; 3]> {
+    let n = (((b.0 - a.0) * RM).abs().max(((b.1 - a.1) * RT).abs()) / 0.002).ceil() as usize;
+    (0..=n.max(1))
+        .map(|i| {
+            let t = i as f64 / n.max(1) as f64;
+            torus(a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1))
+        })
+        .collect()
+}
+
+fn path(corners: &[(f64, f64)]) -> Vec<[f64; 3]> {
+    let mut out = vec![torus(corners[0].0, corners[0].1)];
+    for w in corners.windows(2) {
+        out.extend(seg(w[0], w[1]).into_iter().skip(1));
+    }
+    out
+}
+
+fn curve(pts: &[[f64; 3]], id: u32) -> CurveInput<'_> {
+    CurveInput {
+        points: pts,
+        stroke: Some(id),
+        sigma_mm: None,
+    }
+}
+
+/// The strokes: 0 the strip's boundary, 1 and 2 curves across it, 3.. gluing markers.
+fn strokes() -> Vec<Vec<[f64; 3]>> {
+    vec![
+        path(&[(0.0, 0.0), (TH, 0.0), (TH, PH), (0.0, PH), (0.0, 0.0)]),
+        seg((PI, 0.0), (PI, PH)),
+        seg((0.0, PI), (TH, PI)),
+        // 3, 4: the θ sides' corners, a₁ → b₁ and a₂ → b₂.
+        vec![torus(0.0, 0.0), torus(TH, 0.0)],
+        vec![torus(0.0, PH), torus(TH, PH)],
+        // 5: the two circles at θ = 0; 6: at θ = π.
+        vec![torus(0.0, 0.0), torus(0.0, PH)],
+        vec![torus(PI, 0.0), torus(PI, PH)],
+    ]
+}
+
+fn strip() -> Network {
+    let s = strokes();
+    let mut net = Network::new();
+    insert_boundary(&mut net, curve(&s[0], 0), &BoundaryOptions::default()).unwrap();
+    net.validate().unwrap();
+    for id in [1, 2] {
+        insert_curve(
+            &mut net,
+            curve(&s[id], id as u32),
+            &InsertOptions::default(),
+        )
+        .unwrap();
+        net.validate().unwrap();
+    }
+    net
+}
+
+fn glue(net: &mut Network, a: usize, b: Option<usize>, options: &GlueOptions) -> Topology {
+    let s = strokes();
+    let before = net.topology();
+    let (r, _) = glue_borders(
+        net,
+        curve(&s[a], a as u32),
+        b.map(|b| curve(&s[b], b as u32)),
+        options,
+    )
+    .unwrap_or_else(|e| panic!("gluing {a}, {b:?}: {e}"));
+    net.validate().unwrap();
+    let t = net.topology();
+    // Bookkeeping: m glued edges remove m edges and m (closed paths) or m + 1 (open paths) vertices,
+    // plus the splits the markers and the matching made (each +1 V, +1 E).
+    assert_eq!(t.faces, before.faces);
+    let (dv, de) = (
+        t.vertices as i64 - before.vertices as i64,
+        t.edges as i64 - before.edges as i64,
+    );
+    assert_eq!(de - dv, r.merged_vertices as i64 - r.glued_edges as i64);
+    t
+}
+
+fn cylinder(survivor: Survivor) -> Network {
+    let mut net = strip();
+    let t0 = net.topology();
+    assert_eq!((t0.euler, t0.boundaries, t0.genus), (1, 1, 0));
+    let t = glue(
+        &mut net,
+        3,
+        Some(4),
+        &GlueOptions {
+            survivor,
+            ..GlueOptions::default()
+        },
+    );
+    assert_eq!(
+        (t.euler, t.boundaries, t.genus, t.components),
+        (0, 2, 0, 1),
+        "{t:?}"
+    );
+    net
+}
+
+fn angles(net: &Network) -> Vec<f64> {
+    net.polylines()
+        .flat_map(|(_, p)| p.points.iter().map(|q| q[1].atan2(q[0])))
+        .collect()
+}
+
+#[test]
+fn a_strip_glued_along_two_sides_is_a_cylinder_with_the_chosen_curve() {
+    let near = |a: f64, b: f64| {
+        let d = (a - b).rem_euclid(2.0 * PI);
+        d.min(2.0 * PI - d) < 1e-9
+    };
+    // A: the θ = 0 side; B: the θ = TH side (angle −0.15).
+    let first = angles(&cylinder(Survivor::First));
+    assert!(first.iter().any(|&a| near(a, 0.0)));
+    assert!(!first.iter().any(|&a| near(a, TH)));
+    let second = angles(&cylinder(Survivor::Second));
+    assert!(second.iter().any(|&a| near(a, TH)));
+    assert!(!second.iter().any(|&a| near(a, 0.0)));
+    let average = angles(&cylinder(Survivor::Average));
+    assert!(!average.iter().any(|&a| near(a, 0.0) || near(a, TH)));
+    assert!(average.iter().any(|&a| near(a, TH / 2.0 + PI)));
+}
+
+#[test]
+fn the_cylinder_glued_along_its_circles_is_a_torus() {
+    let mut net = cylinder(Survivor::Average);
+    let t = glue(&mut net, 5, None, &GlueOptions::default());
+    assert_eq!(
+        (t.euler, t.boundaries, t.genus, t.components),
+        (0, 0, 1, 1),
+        "{t:?}"
+    );
+    // Every edge now has two faces.
+    assert!(net.edges().all(|(_, e)| e.faces.len() == 2));
+}
+
+#[test]
+fn half_the_circles_glued_and_the_rest_closed_is_a_torus() {
+    for part in [GluePart::FirstHalf, GluePart::SecondHalf] {
+        let mut net = cylinder(Survivor::First);
+        let t = glue(
+            &mut net,
+            5,
+            Some(6),
+            &GlueOptions {
+                part,
+                ..GlueOptions::default()
+            },
+        );
+        // A torus with one hole: χ = −1, one boundary, genus 1.
+        assert_eq!((t.euler, t.boundaries, t.genus), (-1, 1, 1), "{part:?}");
+        // Close it: locate the remaining loop with a point of one of its edges.
+        let (_, e) = net.edges().find(|(_, e)| e.faces.len() == 1).unwrap();
+        let p = net.polyline(e.polyline).unwrap().points[1];
+        close_boundary(&mut net, curve(&[p], 9), &CloseOptions::default()).unwrap();
+        net.validate().unwrap();
+        let t = net.topology();
+        assert_eq!((t.euler, t.boundaries, t.genus), (0, 0, 1), "{part:?}");
+    }
+}
+
+#[test]
+fn refused_gluings_leave_the_network_unchanged() {
+    let s = strokes();
+    let mut net = strip();
+    let before = net.clone();
+    // One loop needs the second curve.
+    let e = glue_borders(&mut net, curve(&s[3], 3), None, &GlueOptions::default()).unwrap_err();
+    assert_eq!(e, ToolError::NeedsSecondCurve);
+    assert_eq!(net, before);
+    // Crossed curves would glue a Möbius band.
+    let crossed = vec![torus(0.0, PH), torus(TH, 0.0)];
+    let crossed2 = vec![torus(0.0, 0.0), torus(TH, PH)];
+    let e = glue_borders(
+        &mut net,
+        curve(&crossed, 7),
+        Some(curve(&crossed2, 8)),
+        &GlueOptions::default(),
+    )
+    .unwrap_err();
+    assert_eq!(e.rule(), "orientable gluing");
+    assert_eq!(net, before);
+    // An end off the boundary (in the middle of the strip).
+    let off = vec![torus(0.0, 0.0), torus(PI / 2.0, PI / 2.0)];
+    let e = glue_borders(&mut net, curve(&off, 9), None, &GlueOptions::default()).unwrap_err();
+    assert!(matches!(e, ToolError::NotOnBoundary { .. }), "{e}");
+    assert_eq!(net, before);
+    // Half-loops need two curves.
+    let mut cyl = cylinder(Survivor::First);
+    let before = cyl.clone();
+    let e = glue_borders(
+        &mut cyl,
+        curve(&s[5], 5),
+        None,
+        &GlueOptions {
+            part: GluePart::FirstHalf,
+            ..GlueOptions::default()
+        },
+    )
+    .unwrap_err();
+    assert_eq!(e.rule(), "gluing needs two curves");
+    assert_eq!(cyl, before);
+}
+
+#[test]
+fn undo_redo_and_journal_replay_of_gluings_are_exact() {
+    let s = strokes();
+    let mut net = strip();
+    let before = net.clone();
+    let (_, t) = glue_borders(
+        &mut net,
+        curve(&s[3], 3),
+        Some(curve(&s[4], 4)),
+        &GlueOptions::default(),
+    )
+    .unwrap();
+    let after = net.clone();
+    net.undo(&t);
+    assert_eq!(net, before);
+    net.redo(&t);
+    assert_eq!(net, after);
+    net.validate().unwrap();
+    let inputs: Vec<StrokeInput> = s
+        .iter()
+        .enumerate()
+        .map(|(i, p)| StrokeInput {
+            id: i as u32,
+            points: p.clone(),
+            closed: i == 0,
+            sigma_mm: None,
+            mode: 0,
+        })
+        .collect();
+    let average = GlueOptions {
+        survivor: Survivor::Average,
+        ..GlueOptions::default()
+    };
+    let journal = Journal {
+        steps: vec![
+            Step::Boundary {
+                stroke: 0,
+                close_mm: 10.0,
+                mirror: false,
+            },
+            Step::Insert {
+                stroke: 1,
+                options: InsertOptions::default(),
+                mirror: false,
+            },
+            Step::Insert {
+                stroke: 2,
+                options: InsertOptions::default(),
+                mirror: false,
+            },
+            Step::Glue {
+                strokes: vec![3, 4],
+                options: average.clone(),
+            },
+            Step::Glue {
+                strokes: vec![5],
+                options: GlueOptions::default(),
+            },
+        ],
+        ..Journal::default()
+    };
+    let text = serde_json::to_string_pretty(&journal).unwrap();
+    let back: Journal = serde_json::from_str(&text).unwrap();
+    assert_eq!(back, journal);
+    let replayed = replay(&back, &inputs).unwrap();
+    let mut direct = cylinder(Survivor::Average);
+    glue(&mut direct, 5, None, &GlueOptions::default());
+    assert_eq!(replayed, direct);
+    assert_eq!(replayed.topology().genus, 1);
+}
