@@ -9,7 +9,8 @@ use super::build::StrokeInput;
 use super::mesh::Network;
 use super::tools::{
     close_boundary, delete_stroke, glue_borders, insert_boundary, insert_curve, mirror_curve,
-    tag_sharp, BoundaryOptions, CloseOptions, CurveInput, GlueOptions, InsertOptions, ToolError,
+    skin_profiles, tag_sharp, BoundaryOptions, CloseOptions, CurveInput, GlueOptions,
+    InsertOptions, SkinOptions, ToolError,
 };
 
 /// The `format` value of a journal.
@@ -68,6 +69,16 @@ pub enum Step {
         /// Survivor, halves and distances.
         #[serde(default)]
         options: GlueOptions,
+    },
+    /// Skinning: closed profile strokes in order and two spine strokes.
+    Skin {
+        /// The profiles, in order along the spines.
+        profiles: Vec<u32>,
+        /// The two spines.
+        spines: [u32; 2],
+        /// Thresholds and caps.
+        #[serde(default)]
+        options: SkinOptions,
     },
 }
 
@@ -135,31 +146,38 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
                     .map_err(|error| JournalError::Refused { step, error })?;
                 continue;
             }
+            Step::Skin {
+                profiles,
+                spines,
+                options,
+            } => {
+                let ps = profiles
+                    .iter()
+                    .map(|id| find(strokes, step, *id).map(curve))
+                    .collect::<Result<Vec<_>, _>>()?;
+                let sp = [
+                    curve(find(strokes, step, spines[0])?),
+                    curve(find(strokes, step, spines[1])?),
+                ];
+                skin_profiles(&mut net, &ps, sp, options)
+                    .map_err(|error| JournalError::Refused { step, error })?;
+                continue;
+            }
             Step::Glue {
                 strokes: ids,
                 options,
             } => {
-                let find = |id: &u32| {
-                    strokes
-                        .iter()
-                        .find(|x| x.id == *id)
-                        .ok_or(JournalError::MissingStroke { step, stroke: *id })
-                };
-                fn curve(s: &StrokeInput) -> CurveInput<'_> {
-                    CurveInput {
-                        points: &s.points,
-                        stroke: Some(s.id),
-                        sigma_mm: s.sigma_mm,
-                    }
-                }
                 let (Some(first), second) = (ids.first(), ids.get(1)) else {
                     return Err(JournalError::Refused {
                         step,
                         error: ToolError::BadCurve("a glue step names no stroke".into()),
                     });
                 };
-                let first = curve(find(first)?);
-                let second = second.map(find).transpose()?.map(curve);
+                let first = curve(find(strokes, step, *first)?);
+                let second = second
+                    .map(|id| find(strokes, step, *id))
+                    .transpose()?
+                    .map(curve);
                 glue_borders(&mut net, first, second, options)
                     .map_err(|error| JournalError::Refused { step, error })?;
                 continue;
@@ -198,9 +216,26 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
             .map(|_| ()),
             Step::Insert { options, .. } => insert_curve(&mut net, curve, options).map(|_| ()),
             Step::Close { options, .. } => close_boundary(&mut net, curve, options).map(|_| ()),
-            Step::Delete { .. } | Step::Sharp { .. } | Step::Glue { .. } => Ok(()),
+            Step::Delete { .. } | Step::Sharp { .. } | Step::Glue { .. } | Step::Skin { .. } => {
+                Ok(())
+            }
         };
         r.map_err(|error| JournalError::Refused { step, error })?;
     }
     Ok(net)
+}
+
+fn find(strokes: &[StrokeInput], step: usize, id: u32) -> Result<&StrokeInput, JournalError> {
+    strokes
+        .iter()
+        .find(|x| x.id == id)
+        .ok_or(JournalError::MissingStroke { step, stroke: id })
+}
+
+fn curve(s: &StrokeInput) -> CurveInput<'_> {
+    CurveInput {
+        points: &s.points,
+        stroke: Some(s.id),
+        sigma_mm: s.sigma_mm,
+    }
 }

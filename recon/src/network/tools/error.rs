@@ -125,6 +125,32 @@ pub enum ToolError {
     /// The gluing curves cross, so the glued surface would not be orientable.
     #[error("rule \"orientable gluing\": the curves cross (a Möbius band), the faces would traverse the glued curve the same way")]
     CrossedGluing,
+    /// A skinning spine does not come within the intersection threshold of a profile.
+    #[error("rule \"spines cross every profile\": spine {spine} passes {distance_mm:.2} mm from profile {profile} (threshold {limit_mm:.2} mm)")]
+    SpineMissesProfile {
+        /// The spine (0 or 1).
+        spine: usize,
+        /// The profile (in the given order).
+        profile: usize,
+        /// Closest distance between the two.
+        distance_mm: f64,
+        /// The threshold used.
+        limit_mm: f64,
+    },
+    /// A skinning spine meets the profiles out of order (either way along it).
+    #[error("rule \"spines cross the profiles in order\": spine {spine} meets the profiles out of order")]
+    SpineOrder {
+        /// The spine (0 or 1).
+        spine: usize,
+    },
+    /// The two spines cross a profile at (nearly) one point, so it has no two halves.
+    #[error("rule \"spines cross a profile apart\": the spines cross profile {profile} {distance_mm:.2} mm apart")]
+    SpinesMeet {
+        /// The profile.
+        profile: usize,
+        /// Distance between the two crossings.
+        distance_mm: f64,
+    },
 }
 
 impl ToolError {
@@ -146,6 +172,9 @@ impl ToolError {
             ToolError::NeedsSecondCurve => "gluing needs two curves",
             ToolError::DegenerateGluing => "glued paths have length",
             ToolError::CrossedGluing => "orientable gluing",
+            ToolError::SpineMissesProfile { .. } => "spines cross every profile",
+            ToolError::SpineOrder { .. } => "spines cross the profiles in order",
+            ToolError::SpinesMeet { .. } => "spines cross a profile apart",
         }
     }
 
@@ -156,6 +185,8 @@ impl ToolError {
             ToolError::EndNotOnNetwork { distance_mm, .. } => Some(*distance_mm),
             ToolError::NoCommonFace { threshold_mm, .. } => Some(*threshold_mm),
             ToolError::NotOnBoundary { distance_mm, .. } => Some(*distance_mm),
+            ToolError::SpineMissesProfile { distance_mm, .. } => Some(*distance_mm),
+            ToolError::SpinesMeet { distance_mm, .. } => Some(*distance_mm),
             _ => None,
         }
     }

@@ -13,6 +13,7 @@ mod gluing;
 mod insert;
 mod mirror;
 mod sharp;
+mod skin;
 mod skinning;
 
 pub use align::{align_curves, quaternion_matrix, transform_network, AlignOptions, Alignment};
@@ -24,6 +25,7 @@ pub use gluing::{glue_borders, GlueOptions, GluePart, GlueReport, Survivor};
 pub use insert::{insert_curve, Adjustment, InsertOptions, InsertReport};
 pub use mirror::{mirror_curve, Mirrored};
 pub use sharp::tag_sharp;
+pub use skin::{skin_profiles, SkinOptions, SkinReport};
 pub use skinning::{half_direction, pair_halves};
 
 /// A curve as a tool reads it: a drawn stroke or a generated curve.
