@@ -300,3 +300,174 @@ fn undo_redo_and_journal_replay_of_gluings_are_exact() {
     assert_eq!(replayed, direct);
     assert_eq!(replayed.topology().genus, 1);
 }
+
+// ---- The thesis's tube gluing: two inserted curves and two faces on the same four vertices. ----
+
+use fires_recon::network::tools::{glue_tube, TubeHalves, TubeOptions};
+
+fn tube(
+    net: &mut Network,
+    c1: &[[f64; 3]],
+    c2: &[[f64; 3]],
+    halves: TubeHalves,
+) -> Result<bool, ToolError> {
+    let options = TubeOptions {
+        halves,
+        ..TubeOptions::default()
+    };
+    let before = net.topology();
+    let (r, _) = glue_tube(net, curve(c1, 20), curve(c2, 21), &options)?;
+    net.validate().unwrap();
+    let t = net.topology();
+    assert_eq!(t.faces, before.faces + 2);
+    assert_eq!(t.boundaries + 2, before.boundaries);
+    // f1 and f2 have exactly the same vertices: a1, a2, b1, b2.
+    let verts = |f| {
+        let mut v: Vec<_> = net
+            .face(f)
+            .unwrap()
+            .uses
+            .iter()
+            .map(|u| net.use_start(*u).unwrap())
+            .filter(|v| r.vertices.contains(v))
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(verts(r.faces[0]), verts(r.faces[1]));
+    assert_eq!(verts(r.faces[0]).len(), 4);
+    Ok(r.flipped)
+}
+
+#[test]
+fn a_tube_between_the_cylinders_ends_is_a_torus() {
+    let c1 = seg((0.0, PH), (0.0, 2.0 * PI));
+    let c2 = seg((PI, PH), (PI, 2.0 * PI));
+    let mut oriented = cylinder(Survivor::First);
+    let before = oriented.clone();
+    assert!(!tube(&mut oriented, &c1, &c2, TubeHalves::Oriented).unwrap());
+    let t = oriented.topology();
+    assert_eq!((t.euler, t.boundaries, t.genus), (0, 0, 1), "{t:?}");
+    // The geometric choice agrees here; the other pairing on one surface is a Möbius band.
+    let mut auto = before.clone();
+    assert!(!tube(&mut auto, &c1, &c2, TubeHalves::Auto).unwrap());
+    assert_eq!(auto, oriented);
+    let mut flipped = before.clone();
+    let e = tube(&mut flipped, &c1, &c2, TubeHalves::Flipped).unwrap_err();
+    assert_eq!(e.rule(), "orientable gluing");
+    assert_eq!(flipped, before);
+    // Both curves on one border.
+    let mut same = before.clone();
+    let c3 = seg((0.0, PH), (PI / 2.0, PH));
+    let e = glue_tube(
+        &mut same,
+        curve(&c1, 20),
+        curve(&c3, 21),
+        &TubeOptions::default(),
+    )
+    .unwrap_err();
+    assert!(matches!(e, ToolError::DifferentBoundaries { .. }), "{e}");
+    assert_eq!(same, before);
+}
+
+#[test]
+fn a_tube_between_two_discs_pairs_the_halves_by_geometry() {
+    let disc = |z: f64, sign: f64| -> Vec<[f64; 3]> {
+        (0..=200)
+            .map(|i| {
+                let a = sign * 2.0 * PI * i as f64 / 200.0;
+                [0.1 * a.cos(), 0.097 * a.sin(), z]
+            })
+            .collect()
+    };
+    let c1 = vec![[0.0, 0.097, 0.0], [0.0, 0.097, 0.1]];
+    let c2 = vec![[0.0, -0.097, 0.0], [0.0, -0.097, 0.1]];
+    for (sign, expect_flip) in [(1.0, true), (-1.0, false)] {
+        let mut net = Network::new();
+        for (z, s, id) in [(0.0, 1.0, 0), (0.1, sign, 1)] {
+            let d = disc(z, s);
+            insert_boundary(&mut net, curve(&d, id), &BoundaryOptions::default()).unwrap();
+        }
+        // Discs drawn the same way round face the same way: a straight tube reverses one.
+        let flipped = tube(&mut net, &c1, &c2, TubeHalves::Auto).unwrap();
+        assert_eq!(flipped, expect_flip, "sign {sign}");
+        let t = net.topology();
+        assert_eq!((t.components, t.euler, t.boundaries, t.genus), (1, 2, 0, 0));
+        // Each tube face holds the same side (x > 0 or x < 0) of both discs.
+        let mut tubes = 0;
+        for (_, face) in net.faces() {
+            let all: Vec<[f64; 3]> = face
+                .uses
+                .iter()
+                .flat_map(|u| net.edge_polyline(u.edge).unwrap().points.clone())
+                .collect();
+            // The tube faces reach both discs; the discs' own faces one.
+            if !(all.iter().any(|p| p[2] < 0.05) && all.iter().any(|p| p[2] > 0.05)) {
+                continue;
+            }
+            tubes += 1;
+            let pts: Vec<&[f64; 3]> = all.iter().filter(|p| p[0].abs() > 0.01).collect();
+            assert!(
+                pts.iter().all(|p| p[0] > 0.0) || pts.iter().all(|p| p[0] < 0.0),
+                "a twisted tube face"
+            );
+        }
+        assert_eq!(tubes, 2);
+    }
+}
+
+#[test]
+fn a_journal_tube_step_replays_bit_for_bit() {
+    let c1 = seg((0.0, PH), (0.0, 2.0 * PI));
+    let c2 = seg((PI, PH), (PI, 2.0 * PI));
+    let mut inputs: Vec<StrokeInput> = strokes()
+        .into_iter()
+        .enumerate()
+        .map(|(i, points)| StrokeInput {
+            id: i as u32,
+            points,
+            closed: i == 0,
+            sigma_mm: None,
+            mode: 0,
+        })
+        .collect();
+    for (id, points) in [(20, c1.clone()), (21, c2.clone())] {
+        inputs.push(StrokeInput {
+            id,
+            points,
+            closed: false,
+            sigma_mm: None,
+            mode: 0,
+        });
+    }
+    let insert = |stroke| Step::Insert {
+        stroke,
+        options: InsertOptions::default(),
+        mirror: false,
+    };
+    let journal = Journal {
+        steps: vec![
+            Step::Boundary {
+                stroke: 0,
+                close_mm: 10.0,
+                mirror: false,
+            },
+            insert(1),
+            insert(2),
+            Step::Glue {
+                strokes: vec![3, 4],
+                options: GlueOptions::default(),
+            },
+            Step::Tube {
+                strokes: [20, 21],
+                options: TubeOptions::default(),
+            },
+        ],
+        ..Journal::default()
+    };
+    let back: Journal = serde_json::from_str(&serde_json::to_string(&journal).unwrap()).unwrap();
+    let replayed = replay(&back, &inputs).unwrap();
+    let mut direct = cylinder(Survivor::First);
+    tube(&mut direct, &c1, &c2, TubeHalves::Oriented).unwrap();
+    assert_eq!(replayed, direct);
+}

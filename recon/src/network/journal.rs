@@ -8,9 +8,9 @@ use serde::{Deserialize, Serialize};
 use super::build::StrokeInput;
 use super::mesh::Network;
 use super::tools::{
-    close_boundary, delete_stroke, glue_borders, insert_boundary, insert_curve, mirror_curve,
-    skin_profiles, tag_sharp, BoundaryOptions, CloseOptions, CurveInput, GlueOptions,
-    InsertOptions, SkinOptions, ToolError,
+    close_boundary, delete_stroke, glue_borders, glue_tube, insert_boundary, insert_curve,
+    mirror_curve, skin_profiles, tag_sharp, BoundaryOptions, CloseOptions, CurveInput, GlueOptions,
+    InsertOptions, SkinOptions, ToolError, TubeOptions,
 };
 
 /// The `format` value of a journal.
@@ -69,6 +69,15 @@ pub enum Step {
         /// Survivor, halves and distances.
         #[serde(default)]
         options: GlueOptions,
+    },
+    /// Border gluing by a tube of two faces (the thesis's construction): two strokes a₁ → b₁, a₂ → b₂,
+    /// both inserted.
+    Tube {
+        /// The two strokes.
+        strokes: [u32; 2],
+        /// Half pairing and distances.
+        #[serde(default)]
+        options: TubeOptions,
     },
     /// Skinning: closed profile strokes in order and two spine strokes.
     Skin {
@@ -163,6 +172,16 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
                     .map_err(|error| JournalError::Refused { step, error })?;
                 continue;
             }
+            Step::Tube {
+                strokes: ids,
+                options,
+            } => {
+                let c1 = curve(find(strokes, step, ids[0])?);
+                let c2 = curve(find(strokes, step, ids[1])?);
+                glue_tube(&mut net, c1, c2, options)
+                    .map_err(|error| JournalError::Refused { step, error })?;
+                continue;
+            }
             Step::Glue {
                 strokes: ids,
                 options,
@@ -216,9 +235,11 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
             .map(|_| ()),
             Step::Insert { options, .. } => insert_curve(&mut net, curve, options).map(|_| ()),
             Step::Close { options, .. } => close_boundary(&mut net, curve, options).map(|_| ()),
-            Step::Delete { .. } | Step::Sharp { .. } | Step::Glue { .. } | Step::Skin { .. } => {
-                Ok(())
-            }
+            Step::Delete { .. }
+            | Step::Sharp { .. }
+            | Step::Glue { .. }
+            | Step::Skin { .. }
+            | Step::Tube { .. } => Ok(()),
         };
         r.map_err(|error| JournalError::Refused { step, error })?;
     }

@@ -171,7 +171,13 @@ pub fn glue_borders(
 
 /// The vertex a curve end attaches to: an end vertex of the nearest boundary edge within `vsnap`, or a
 /// new vertex splitting that edge.
-fn anchor(net: &mut Network, p: P3, end: End, r: f64, vsnap: f64) -> Result<VertexId, ToolError> {
+pub(crate) fn anchor(
+    net: &mut Network,
+    p: P3,
+    end: End,
+    r: f64,
+    vsnap: f64,
+) -> Result<VertexId, ToolError> {
     let bp = border_end(net, p, end, r)?;
     let internal = || ToolError::BadCurve("internal: boundary edge vanished".into());
     let ed = net.edge(bp.edge).cloned().ok_or_else(internal)?;
@@ -191,7 +197,7 @@ fn anchor(net: &mut Network, p: P3, end: End, r: f64, vsnap: f64) -> Result<Vert
 }
 
 /// The boundary loop through `v` (closing direction), rotated to start at `v`.
-fn loop_at(net: &Network, v: VertexId) -> Result<Vec<EdgeUse>, ToolError> {
+pub(crate) fn loop_at(net: &Network, v: VertexId) -> Result<Vec<EdgeUse>, ToolError> {
     let e = net
         .vertex(v)
         .and_then(|x| x.edges.iter().copied().find(|&e| is_border(net, e)))

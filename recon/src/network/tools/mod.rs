@@ -15,6 +15,7 @@ mod mirror;
 mod sharp;
 mod skin;
 mod skinning;
+mod tube;
 
 pub use align::{align_curves, quaternion_matrix, transform_network, AlignOptions, Alignment};
 pub use boundary::{insert_boundary, BoundaryOptions, BoundaryReport};
@@ -27,6 +28,7 @@ pub use mirror::{mirror_curve, Mirrored};
 pub use sharp::tag_sharp;
 pub use skin::{skin_profiles, SkinOptions, SkinReport};
 pub use skinning::{half_direction, pair_halves};
+pub use tube::{glue_tube, TubeHalves, TubeOptions, TubeReport};
 
 /// A curve as a tool reads it: a drawn stroke or a generated curve.
 #[derive(Clone, Copy, Debug)]
