@@ -471,3 +471,95 @@ fn a_journal_tube_step_replays_bit_for_bit() {
     tube(&mut direct, &c1, &c2, TubeHalves::Oriented).unwrap();
     assert_eq!(replayed, direct);
 }
+
+/// A small deterministic generator (xorshift64*).
+struct Rng(u64);
+
+impl Rng {
+    fn unit(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+}
+
+#[test]
+fn randomised_strips_glue_into_cylinders_and_tori() {
+    let mut rng = Rng(0x61_0E5);
+    let (mut tori, mut inserted) = (0, 0);
+    for case in 0..120 {
+        // A strip with 0–3 curves across θ and 0–2 along it, at random places.
+        let s = strokes();
+        let mut net = Network::new();
+        insert_boundary(&mut net, curve(&s[0], 0), &BoundaryOptions::default()).unwrap();
+        let mut id = 1;
+        let n_th = (rng.unit() * 4.0) as usize;
+        for k in 0..n_th {
+            let th = (k as f64 + rng.range(0.2, 0.8)) * TH / n_th as f64;
+            let c = seg((th, 0.0), (th, PH));
+            // Rule 1 may refuse a curve whose ends are on one boundary edge; it is then left out.
+            inserted += usize::from(
+                insert_curve(&mut net, curve(&c, id), &InsertOptions::default()).is_ok(),
+            );
+            net.validate().unwrap();
+            id += 1;
+        }
+        let n_ph = (rng.unit() * 3.0) as usize;
+        for k in 0..n_ph {
+            let ph = (k as f64 + rng.range(0.2, 0.8)) * PH / n_ph as f64;
+            let c = seg((0.0, ph), (TH, ph));
+            // Rule 1 may refuse a curve whose ends are on one boundary edge; it is then left out.
+            inserted += usize::from(
+                insert_curve(&mut net, curve(&c, id), &InsertOptions::default()).is_ok(),
+            );
+            net.validate().unwrap();
+            id += 1;
+        }
+        let survivor = [Survivor::First, Survivor::Second, Survivor::Average][case % 3];
+        let options = GlueOptions {
+            survivor,
+            ..GlueOptions::default()
+        };
+        // Whole sides (corner to corner) or a random part of them, the curves in either order.
+        let whole = rng.unit() < 0.5;
+        let (mut p1, mut p2) = if whole {
+            (0.0, PH)
+        } else {
+            let a = rng.range(0.0, PH - 0.5);
+            (a, rng.range(a + 0.4, PH))
+        };
+        if rng.unit() < 0.5 {
+            std::mem::swap(&mut p1, &mut p2);
+        }
+        let m1 = vec![torus(0.0, p1), torus(TH, p1)];
+        let m2 = vec![torus(0.0, p2), torus(TH, p2)];
+        let before = net.topology();
+        let (r, _) = glue_borders(&mut net, curve(&m1, 90), Some(curve(&m2, 91)), &options)
+            .unwrap_or_else(|e| panic!("case {case}: {e}"));
+        net.validate().unwrap();
+        let t = net.topology();
+        assert_eq!(
+            (t.euler, t.boundaries, t.genus),
+            (0, 2, 0),
+            "case {case}: {t:?}"
+        );
+        assert_eq!(t.faces, before.faces);
+        assert!(r.same_loop);
+        if whole {
+            let c = vec![torus(0.0, 0.0), torus(0.0, PH)];
+            glue_borders(&mut net, curve(&c, 92), None, &options)
+                .unwrap_or_else(|e| panic!("case {case}: {e}"));
+            net.validate().unwrap();
+            let t = net.topology();
+            assert_eq!((t.euler, t.boundaries, t.genus), (0, 0, 1), "case {case}");
+            tori += 1;
+        }
+    }
+    assert!(tori > 30, "{tori}");
+    eprintln!("{tori} tori, {inserted} curves inserted");
+    assert!(inserted > 150, "{inserted}");
+}
