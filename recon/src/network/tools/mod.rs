@@ -9,6 +9,7 @@ mod closure;
 mod crossings;
 mod delete;
 mod error;
+mod glue_paths;
 mod gluing;
 mod insert;
 mod mirror;
