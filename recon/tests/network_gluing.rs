@@ -389,7 +389,19 @@ fn a_tube_between_two_discs_pairs_the_halves_by_geometry() {
             insert_boundary(&mut net, curve(&d, id), &BoundaryOptions::default()).unwrap();
         }
         // Discs drawn the same way round face the same way: a straight tube reverses one.
+        let t0 = net.topology();
         let flipped = tube(&mut net, &c1, &c2, TubeHalves::Auto).unwrap();
+        // The four ends split four edges (no vertex near): ΔV = 4, ΔE = 4 + 2, ΔF = 2, Δχ = 0.
+        let t1 = net.topology();
+        assert_eq!(
+            (
+                t1.vertices - t0.vertices,
+                t1.edges - t0.edges,
+                t1.faces - t0.faces
+            ),
+            (4, 6, 2)
+        );
+        assert_eq!(t1.euler, t0.euler);
         assert_eq!(flipped, expect_flip, "sign {sign}");
         let t = net.topology();
         assert_eq!((t.components, t.euler, t.boundaries, t.genus), (1, 2, 0, 0));
