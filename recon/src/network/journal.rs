@@ -8,8 +8,9 @@ use serde::{Deserialize, Serialize};
 use super::build::StrokeInput;
 use super::mesh::Network;
 use super::tools::{
-    create_hole, delete_stroke, insert_boundary, insert_curve, mirror_curve, tag_sharp,
-    BoundaryOptions, CurveInput, HoleOptions, InsertOptions, ToolError,
+    close_boundary, create_hole, delete_stroke, glue_borders, glue_tube, insert_boundary,
+    insert_curve, mirror_curve, skin_profiles, tag_sharp, BoundaryOptions, CloseOptions,
+    CurveInput, GlueOptions, HoleOptions, InsertOptions, SkinOptions, ToolError, TubeOptions,
 };
 
 /// The `format` value of a journal.
@@ -60,6 +61,41 @@ pub enum Step {
         /// Thresholds and solver settings.
         #[serde(default)]
         options: HoleOptions,
+    },
+    /// Mesh closure: a face on the boundary loop both ends of the stroke lie on.
+    Close {
+        /// The locating stroke (not inserted by this step).
+        stroke: u32,
+        /// Snapping distance.
+        #[serde(default)]
+        options: CloseOptions,
+    },
+    /// Border gluing: the marker strokes a₁ → b₁ and optionally a₂ → b₂ (not inserted).
+    Glue {
+        /// One or two stroke ids.
+        strokes: Vec<u32>,
+        /// Survivor, halves and distances.
+        #[serde(default)]
+        options: GlueOptions,
+    },
+    /// Border gluing by a tube of two faces (the thesis's construction): two strokes a₁ → b₁, a₂ → b₂,
+    /// both inserted.
+    Tube {
+        /// The two strokes.
+        strokes: [u32; 2],
+        /// Half pairing and distances.
+        #[serde(default)]
+        options: TubeOptions,
+    },
+    /// Skinning: closed profile strokes in order and two spine strokes.
+    Skin {
+        /// The profiles, in order along the spines.
+        profiles: Vec<u32>,
+        /// The two spines.
+        spines: [u32; 2],
+        /// Thresholds and caps.
+        #[serde(default)]
+        options: SkinOptions,
     },
 }
 
@@ -121,9 +157,56 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
         let id = match s {
             Step::Boundary { stroke, .. }
             | Step::Insert { stroke, .. }
-            | Step::Hole { stroke, .. } => *stroke,
+            | Step::Hole { stroke, .. }
+            | Step::Close { stroke, .. } => *stroke,
             Step::Delete { stroke } => {
                 delete_stroke(&mut net, *stroke)
+                    .map_err(|error| JournalError::Refused { step, error })?;
+                continue;
+            }
+            Step::Skin {
+                profiles,
+                spines,
+                options,
+            } => {
+                let ps = profiles
+                    .iter()
+                    .map(|id| find(strokes, step, *id).map(curve))
+                    .collect::<Result<Vec<_>, _>>()?;
+                let sp = [
+                    curve(find(strokes, step, spines[0])?),
+                    curve(find(strokes, step, spines[1])?),
+                ];
+                skin_profiles(&mut net, &ps, sp, options)
+                    .map_err(|error| JournalError::Refused { step, error })?;
+                continue;
+            }
+            Step::Tube {
+                strokes: ids,
+                options,
+            } => {
+                let c1 = curve(find(strokes, step, ids[0])?);
+                let c2 = curve(find(strokes, step, ids[1])?);
+                glue_tube(&mut net, c1, c2, options)
+                    .map_err(|error| JournalError::Refused { step, error })?;
+                continue;
+            }
+            Step::Glue {
+                strokes: ids,
+                options,
+            } => {
+                let (Some(first), second) = (ids.first(), ids.get(1)) else {
+                    return Err(JournalError::Refused {
+                        step,
+                        error: ToolError::BadCurve("a glue step names no stroke".into()),
+                    });
+                };
+                let first = curve(find(strokes, step, *first)?);
+                let second = second
+                    .map(|id| find(strokes, step, *id))
+                    .transpose()?
+                    .map(curve);
+                glue_borders(&mut net, first, second, options)
                     .map_err(|error| JournalError::Refused { step, error })?;
                 continue;
             }
@@ -161,9 +244,29 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
             .map(|_| ()),
             Step::Insert { options, .. } => insert_curve(&mut net, curve, options).map(|_| ()),
             Step::Hole { options, .. } => create_hole(&mut net, curve, options).map(|_| ()),
-            Step::Delete { .. } | Step::Sharp { .. } => Ok(()),
+            Step::Close { options, .. } => close_boundary(&mut net, curve, options).map(|_| ()),
+            Step::Delete { .. }
+            | Step::Sharp { .. }
+            | Step::Glue { .. }
+            | Step::Skin { .. }
+            | Step::Tube { .. } => Ok(()),
         };
         r.map_err(|error| JournalError::Refused { step, error })?;
     }
     Ok(net)
+}
+
+fn find(strokes: &[StrokeInput], step: usize, id: u32) -> Result<&StrokeInput, JournalError> {
+    strokes
+        .iter()
+        .find(|x| x.id == id)
+        .ok_or(JournalError::MissingStroke { step, stroke: id })
+}
+
+fn curve(s: &StrokeInput) -> CurveInput<'_> {
+    CurveInput {
+        points: &s.points,
+        stroke: Some(s.id),
+        sigma_mm: s.sigma_mm,
+    }
 }

@@ -2,7 +2,7 @@
 
 use std::fmt;
 
-use crate::network::EdgeId;
+use crate::network::{EdgeId, VertexId};
 
 /// Which end of a curve.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -96,6 +96,71 @@ pub enum ToolError {
         /// The distance that failed, mm, where there is one.
         distance_mm: Option<f64>,
     },
+    /// An end of a closure, gluing or skinning curve is not on a boundary edge.
+    #[error("rule \"ends on a boundary\": the {end} is {distance_mm:.2} mm from the nearest boundary edge (limit {limit_mm:.2} mm)")]
+    NotOnBoundary {
+        /// Which end.
+        end: End,
+        /// Distance to the nearest boundary point (infinite when there is no boundary).
+        distance_mm: f64,
+        /// The snapping distance used.
+        limit_mm: f64,
+    },
+    /// An edge that should be on a boundary loop is not (it has two faces, or none).
+    #[error("rule \"boundary edge\": edge {edge} is not on a boundary loop")]
+    NotABoundaryEdge {
+        /// The edge.
+        edge: EdgeId,
+    },
+    /// Two boundary loops touch at a vertex, so the loop through it is ambiguous.
+    #[error("rule \"simple boundary loop\": two boundary loops touch at vertex {vertex}")]
+    PinchedBoundary {
+        /// The vertex.
+        vertex: VertexId,
+    },
+    /// Closure needs both ends on one loop.
+    #[error("rule \"one boundary loop\": the ends lie on two different boundary loops (edges {first} and {second})")]
+    DifferentBoundaries {
+        /// An edge of the first end's loop.
+        first: EdgeId,
+        /// An edge of the second end's loop.
+        second: EdgeId,
+    },
+    /// Gluing one loop to itself, or half-loops, needs the second curve.
+    #[error("rule \"gluing needs two curves\": paths on one loop, or halves of two loops, need the second curve")]
+    NeedsSecondCurve,
+    /// A glued path would have no length (both ends of a path on one vertex).
+    #[error("rule \"glued paths have length\": a path to glue starts and ends on one vertex")]
+    DegenerateGluing,
+    /// The gluing curves cross, so the glued surface would not be orientable.
+    #[error("rule \"orientable gluing\": the curves cross (a Möbius band), the faces would traverse the glued curve the same way")]
+    CrossedGluing,
+    /// A skinning spine does not come within the intersection threshold of a profile.
+    #[error("rule \"spines cross every profile\": spine {spine} passes {distance_mm:.2} mm from profile {profile} (threshold {limit_mm:.2} mm)")]
+    SpineMissesProfile {
+        /// The spine (0 or 1).
+        spine: usize,
+        /// The profile (in the given order).
+        profile: usize,
+        /// Closest distance between the two.
+        distance_mm: f64,
+        /// The threshold used.
+        limit_mm: f64,
+    },
+    /// A skinning spine meets the profiles out of order (either way along it).
+    #[error("rule \"spines cross the profiles in order\": spine {spine} meets the profiles out of order")]
+    SpineOrder {
+        /// The spine (0 or 1).
+        spine: usize,
+    },
+    /// The two spines cross a profile at (nearly) one point, so it has no two halves.
+    #[error("rule \"spines cross a profile apart\": the spines cross profile {profile} {distance_mm:.2} mm apart")]
+    SpinesMeet {
+        /// The profile.
+        profile: usize,
+        /// Distance between the two crossings.
+        distance_mm: f64,
+    },
 }
 
 impl ToolError {
@@ -111,6 +176,16 @@ impl ToolError {
             ToolError::CannotDelete { .. } => "delete merges two faces",
             ToolError::NoToolForMode { .. } => "pen mode has a tool",
             ToolError::Hole { rule, .. } => rule.name(),
+            ToolError::NotOnBoundary { .. } => "ends on a boundary",
+            ToolError::NotABoundaryEdge { .. } => "boundary edge",
+            ToolError::PinchedBoundary { .. } => "simple boundary loop",
+            ToolError::DifferentBoundaries { .. } => "one boundary loop",
+            ToolError::NeedsSecondCurve => "gluing needs two curves",
+            ToolError::DegenerateGluing => "glued paths have length",
+            ToolError::CrossedGluing => "orientable gluing",
+            ToolError::SpineMissesProfile { .. } => "spines cross every profile",
+            ToolError::SpineOrder { .. } => "spines cross the profiles in order",
+            ToolError::SpinesMeet { .. } => "spines cross a profile apart",
         }
     }
 
@@ -121,6 +196,9 @@ impl ToolError {
             ToolError::EndNotOnNetwork { distance_mm, .. } => Some(*distance_mm),
             ToolError::NoCommonFace { threshold_mm, .. } => Some(*threshold_mm),
             ToolError::Hole { distance_mm, .. } => *distance_mm,
+            ToolError::NotOnBoundary { distance_mm, .. } => Some(*distance_mm),
+            ToolError::SpineMissesProfile { distance_mm, .. } => Some(*distance_mm),
+            ToolError::SpinesMeet { distance_mm, .. } => Some(*distance_mm),
             _ => None,
         }
     }

@@ -3,27 +3,37 @@
 //! failed and leaves the network bit for bit as it was.
 
 mod align;
+mod border;
 mod boundary;
+mod closure;
 mod crossings;
 mod delete;
 mod error;
+mod glue_paths;
+mod gluing;
 mod hole;
 mod hole_cut;
 mod hole_spokes;
 mod insert;
 mod mirror;
 mod sharp;
+mod skin;
 mod skinning;
+mod tube;
 
 pub use align::{align_curves, quaternion_matrix, transform_network, AlignOptions, Alignment};
 pub use boundary::{insert_boundary, BoundaryOptions, BoundaryReport};
+pub use closure::{close_boundary, CloseOptions, CloseReport};
 pub use delete::{delete_stroke, DeleteReport};
 pub use error::{End, ToolError};
+pub use gluing::{glue_borders, GlueOptions, GluePart, GlueReport, Survivor};
 pub use hole::{create_hole, HoleKind, HoleOptions, HoleReport, HoleRule};
 pub use insert::{insert_curve, Adjustment, InsertOptions, InsertReport};
 pub use mirror::{mirror_curve, Mirrored};
 pub use sharp::tag_sharp;
+pub use skin::{skin_profiles, SkinOptions, SkinReport};
 pub use skinning::{half_direction, pair_halves};
+pub use tube::{glue_tube, TubeHalves, TubeOptions, TubeReport};
 
 /// A curve as a tool reads it: a drawn stroke or a generated curve.
 #[derive(Clone, Copy, Debug)]

@@ -3,8 +3,7 @@
 //! `d = (p_start + p_end)/2 − p_middle` (normalised; `p_middle` is the half's arc-length midpoint) points
 //! from the half's bulge back to its chord; the pairing of the largest dot product among the four wins
 //! and the complementary halves pair with each other. This assumes consecutive profile planes meet at a
-//! dihedral angle below 90°, as the thesis does. (The skinning tool itself, which builds the faces, is not
-//! written yet.)
+//! dihedral angle below 90°, as the thesis does. The skinning tool that builds the faces is `skin.rs`.
 
 use super::ToolError;
 use crate::network::geom::{arc_lengths, dot, lerp, P3};
