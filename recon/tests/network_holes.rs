@@ -6,8 +6,8 @@ mod common;
 use common::disc::{circle, line, vertical, Rng, B, R, Z};
 use fires_recon::geometry::Vec3;
 use fires_recon::network::tools::{
-    create_hole, insert_boundary, insert_curve, BoundaryOptions, CurveInput, HoleKind, HoleOptions,
-    HoleReport, InsertOptions, ToolError,
+    create_hole, glue_borders, insert_boundary, insert_curve, BoundaryOptions, CurveInput,
+    GlueOptions, HoleKind, HoleOptions, HoleReport, InsertOptions, ToolError,
 };
 use fires_recon::network::{
     build_network, replay, BuildOptions, FaceId, Journal, Network, NetworkFile, Origin, Step,
@@ -325,6 +325,34 @@ fn two_holes_in_a_disc() {
     assert_eq!(rep.kind, HoleKind::Cut { crossings: 2 });
     let t = net.topology();
     assert_eq!((t.boundaries, t.components, t.genus), (3, 1, 0));
+}
+
+#[test]
+fn two_holes_glued_give_a_handle() {
+    // Thesis §5.1.3: two holes in a disc, their borders glued, make a torus with one boundary.
+    let mut net = disc();
+    hole(&mut net, &ring(-0.04, 0.0, 0.02, 100, true)).unwrap();
+    hole(&mut net, &ring(0.03, 0.05, 0.015, 100, false)).unwrap();
+    // One marker curve from hole A's border to hole B's: the whole loops are glued.
+    let marker = line(
+        [-0.02, 0.0, Z],
+        [0.03 - 0.015 * 0.6, 0.05 - 0.015 * 0.8, Z],
+        0.002,
+    );
+    glue_borders(
+        &mut net,
+        CurveInput::new(&marker),
+        None,
+        &GlueOptions::default(),
+    )
+    .unwrap();
+    net.validate().unwrap();
+    let t = net.topology();
+    assert_eq!(
+        (t.boundaries, t.components, t.euler, t.genus),
+        (1, 1, -1, 1),
+        "{t:?}"
+    );
 }
 
 fn strokes() -> Vec<StrokeInput> {
