@@ -668,3 +668,59 @@ fn a_hole_in_a_saddle_shaped_face() {
         }
     }
 }
+
+#[test]
+fn pen_modes_make_a_handle_and_a_tube_that_replay() {
+    // Modes 3 (hole) and 4 (glue): a disc, two holes, one marker between their borders.
+    let s = |id, points, closed, mode| StrokeInput {
+        id,
+        points,
+        closed,
+        sigma_mm: None,
+        mode,
+    };
+    let marker = line([-0.02, 0.0, Z], [0.021, 0.038, Z], 0.002);
+    let strokes = vec![
+        s(0, circle(400), true, 0),
+        s(1, ring(-0.04, 0.0, 0.02, 100, true), true, 3),
+        s(2, marker, false, 4),
+        s(3, ring(0.03, 0.05, 0.015, 100, false), true, 3),
+    ];
+    let (net, report) = build_network(&strokes, &BuildOptions::default());
+    net.validate().unwrap();
+    assert!(report.rejected.is_empty(), "{:?}", report.rejected);
+    let t = report.topology;
+    assert_eq!((t.boundaries, t.genus), (1, 1), "{t:?}");
+    assert_eq!(replay(&report.journal, &strokes).unwrap(), net);
+
+    // Mode 5 (skin): three circular profiles and two straight spines make an open tube.
+    let profile = |z: f64| -> Vec<[f64; 3]> {
+        (0..=120)
+            .map(|i| {
+                let a = 2.0 * PI * i as f64 / 120.0;
+                [0.03 * a.cos(), 0.03 * a.sin(), z]
+            })
+            .collect()
+    };
+    let spine = |x: f64| line([x, 0.0, -0.01], [x, 0.0, 0.11], 0.002);
+    let strokes = vec![
+        s(0, profile(0.0), true, 5),
+        s(1, profile(0.05), true, 5),
+        s(2, profile(0.1), true, 5),
+        s(3, spine(0.03), false, 5),
+        s(4, spine(-0.03), false, 5),
+    ];
+    let (net, report) = build_network(&strokes, &BuildOptions::default());
+    net.validate().unwrap();
+    assert!(report.rejected.is_empty(), "{:?}", report.rejected);
+    let t = report.topology;
+    assert_eq!(
+        (t.faces, t.boundaries, t.euler, t.genus),
+        (4, 2, 0, 0),
+        "{t:?}"
+    );
+    assert_eq!(replay(&report.journal, &strokes).unwrap(), net);
+    // One spine too few: every skin-mode stroke is reported.
+    let (_, report) = build_network(&strokes[..4], &BuildOptions::default());
+    assert_eq!(report.rejected.len(), 4);
+}

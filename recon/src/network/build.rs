@@ -12,8 +12,9 @@ use serde::{Deserialize, Serialize};
 use super::journal::{Journal, Step};
 use super::mesh::Network;
 use super::tools::{
-    create_hole, insert_boundary, insert_curve, mirror_curve, tag_sharp, Adjustment,
-    BoundaryOptions, CurveInput, HoleOptions, InsertOptions, ToolError,
+    create_hole, glue_borders, insert_boundary, insert_curve, mirror_curve, skin_profiles,
+    tag_sharp, Adjustment, BoundaryOptions, CurveInput, GlueOptions, HoleOptions, InsertOptions,
+    SkinOptions, ToolError,
 };
 use super::topology::Topology;
 
@@ -44,9 +45,12 @@ pub enum PenMode {
     Mirror,
     /// 3: hole creation (`create_hole`): the closed stroke bounds a hole (never the boundary).
     Hole,
-    /// 4: border gluing (not yet implemented: reported).
+    /// 4: border gluing (`glue_borders`) after every insertion and hole: a glue-mode stroke is a
+    /// marker from one border to the other; when the tool needs a second marker, the next
+    /// glue-mode stroke is it.
     Glue,
-    /// 5: skinning (not yet implemented: reported).
+    /// 5: skinning (`skin_profiles`) before the gluing: the session's closed skin-mode strokes
+    /// are the profiles in drawing order, its two open ones the spines.
     Skin,
     /// 6, 7: no tool.
     Other(u8),
@@ -145,9 +149,12 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
     };
     // Pen modes: mirrored strokes become their closed mirrored curve; modes without a tool are reported.
     let mut prepared: Vec<StrokeInput> = Vec::with_capacity(strokes.len());
+    let (mut glue, mut skin): (Vec<&StrokeInput>, Vec<&StrokeInput>) = (Vec::new(), Vec::new());
     for s in strokes {
         match PenMode::from_mode(s.mode) {
             PenMode::Insert | PenMode::Sharp | PenMode::Hole => prepared.push(s.clone()),
+            PenMode::Glue => glue.push(s),
+            PenMode::Skin => skin.push(s),
             PenMode::Mirror => match mirror_curve(&s.points) {
                 Ok(m) => prepared.push(StrokeInput {
                     points: m.points,
@@ -253,7 +260,73 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
         ));
         report.rejected.push(rejected(strokes[k].id, &e));
     }
+    apply_skinning(&mut net, &skin, &mut report);
+    apply_gluing(&mut net, &glue, &mut report);
     report.rejected.sort_by_key(|r| r.stroke);
     report.topology = net.topology();
     (net, report)
+}
+
+/// Mode 5: the closed strokes are the profiles, the two open ones the spines (thesis §5.1.4).
+fn apply_skinning(net: &mut Network, skin: &[&StrokeInput], report: &mut BuildReport) {
+    if skin.is_empty() {
+        return;
+    }
+    let (profiles, spines): (Vec<&StrokeInput>, Vec<&StrokeInput>) =
+        skin.iter().partition(|s| s.closed);
+    let result = match spines.as_slice() {
+        [a, b] if profiles.len() >= 2 => {
+            let curves: Vec<CurveInput<'_>> = profiles.iter().map(|s| curve(s)).collect();
+            let options = SkinOptions::default();
+            skin_profiles(net, &curves, [curve(a), curve(b)], &options).map(|_| {
+                report.journal.steps.push(Step::Skin {
+                    profiles: profiles.iter().map(|s| s.id).collect(),
+                    spines: [a.id, b.id],
+                    options,
+                });
+            })
+        }
+        _ => Err(ToolError::BadCurve(format!(
+            "skinning needs at least 2 closed profile strokes and exactly 2 open spine strokes; \
+             the skin-mode strokes are {} closed and {} open",
+            profiles.len(),
+            spines.len()
+        ))),
+    };
+    match result {
+        Ok(()) => report.used.extend(skin.iter().map(|s| s.id)),
+        Err(e) => report
+            .rejected
+            .extend(skin.iter().map(|s| rejected(s.id, &e))),
+    }
+}
+
+/// Mode 4: each marker alone, or with the next one when the tool needs a second (thesis §5.1.3).
+fn apply_gluing(net: &mut Network, glue: &[&StrokeInput], report: &mut BuildReport) {
+    let options = GlueOptions::default();
+    let mut k = 0;
+    while k < glue.len() {
+        let first = glue[k];
+        let mut r = glue_borders(net, curve(first), None, &options).map(|_| vec![first.id]);
+        if matches!(r, Err(ToolError::NeedsSecondCurve)) {
+            if let Some(second) = glue.get(k + 1) {
+                r = glue_borders(net, curve(first), Some(curve(second)), &options)
+                    .map(|_| vec![first.id, second.id]);
+            }
+        }
+        match r {
+            Ok(ids) => {
+                k += ids.len();
+                report.used.extend(&ids);
+                report.journal.steps.push(Step::Glue {
+                    strokes: ids,
+                    options: options.clone(),
+                });
+            }
+            Err(e) => {
+                report.rejected.push(rejected(first.id, &e));
+                k += 1;
+            }
+        }
+    }
 }
