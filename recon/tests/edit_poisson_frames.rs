@@ -313,3 +313,34 @@ fn positions_json_round_trips_and_bad_positions_are_named_errors() {
     assert!(target.distance(Vec3::new(1.0, 0.0, 4.5)) < 1e-15);
 }
 
+
+#[test]
+fn single_vertex_and_collinear_handles_fit_their_motion() {
+    use fires_recon::edit::fit_similarity;
+    let r = axis_angle(Vec3::new(1.0, 0.0, 0.0), 50.0).unwrap();
+    let g = Similarity {
+        scale: 1.5,
+        rotation: r,
+        about: Vec3::new(0.0, 0.0, 1.0),
+        translate: Vec3::new(0.1, 0.2, 0.3),
+    };
+    // A line along z turned about x: the minimal rotation of the line is g's rotation.
+    let line: Vec<Vec3> = (0..5).map(|k| Vec3::new(0.5, 0.0, k as f64)).collect();
+    let moved: Vec<Vec3> = line.iter().map(|p| g.apply(*p)).collect();
+    let fit = fit_similarity(&line, &moved, 0).unwrap();
+    assert!(fit.rotation.angle_to(&r) < 1e-12 && (fit.scale - 1.5).abs() < 1e-12);
+    for (p, q) in line.iter().zip(&moved) {
+        assert!(fit.apply(*p).distance(*q) < 1e-12);
+    }
+    // One vertex: a translation.
+    let one = fit_similarity(&line[..1], &moved[..1], 0).unwrap();
+    assert!(one.rotation.angle() == 0.0 && one.scale == 1.0);
+    assert!(one.apply(line[0]).distance(moved[0]) < 1e-15);
+    // A single-vertex handle through the whole pipeline.
+    let mesh = relief_cylinder();
+    let top = ring(CYL.3 - 1);
+    let spec = spec_with(positions_handle(&mesh, &top[..1], |p| p + Vec3::new(0.0, 0.0, 0.3)));
+    let out = run::<PoissonEditor>(&mesh, &spec, Default::default());
+    let want = mesh.positions()[top[0]] + Vec3::new(0.0, 0.0, 0.3);
+    assert!(out[top[0]].distance(want) < 1e-12);
+}
