@@ -144,9 +144,15 @@ fn edit_accepts_a_handle_given_as_positions() {
     let v: serde_json::Value = serde_json::from_str(line.trim()).unwrap();
     assert_eq!(v["method"], "poisson");
     assert!(v["detail_error"].as_f64().unwrap() > 0.0);
-    let edited = fires_recon::io::read_mesh_file(&out).unwrap().to_mesh().unwrap();
+    let edited = fires_recon::io::read_mesh_file(&out)
+        .unwrap()
+        .to_mesh()
+        .unwrap();
     let p = edited.positions()[15 * 24 + 6];
-    assert!((p.z - 3.5).abs() < 1e-9 && (p.y - 0.8).abs() < 1e-9, "{p:?}");
+    assert!(
+        (p.z - 3.5).abs() < 1e-9 && (p.y - 0.8).abs() < 1e-9,
+        "{p:?}"
+    );
     // Both a transform and positions: a named error, exit code 2.
     let bad = write("bad.json", r#", "transform": {"scale": 2}"#);
     let r = fires(&[
@@ -159,5 +165,8 @@ fn edit_accepts_a_handle_given_as_positions() {
     ]);
     assert_eq!(r.status.code(), Some(2));
     let err = String::from_utf8_lossy(&r.stderr);
-    assert!(err.contains("handle 0 positions") && err.contains("not both"), "{err}");
+    assert!(
+        err.contains("handle 0 positions") && err.contains("not both"),
+        "{err}"
+    );
 }

@@ -52,17 +52,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         anchor_weight: 1.0,
         handles: vec![HandleSpec::with_positions(Select::Vertices(top), positions)],
     };
-    write_mesh_file(&out.join("cylinder.obj"), &PolygonSoup::from_mesh(&mesh))?;
+    write_mesh_file(out.join("cylinder.obj"), &PolygonSoup::from_mesh(&mesh))?;
     std::fs::write(out.join("bend.json"), spec.to_json())?;
-    for method in [Method::Naive, Method::Poisson, Method::Lse, Method::Implicit] {
+    for method in [
+        Method::Naive,
+        Method::Poisson,
+        Method::Lse,
+        Method::Implicit,
+    ] {
         let (x, report) = edit_mesh(&mesh, &spec, method)?;
         println!("{}", serde_json::to_string(&report)?);
         if method == Method::Poisson {
             let mut edited = mesh.clone();
             edited.positions_mut().copy_from_slice(&x);
-            write_mesh_file(&out.join("bent.obj"), &PolygonSoup::from_mesh(&edited))?;
+            write_mesh_file(out.join("bent.obj"), &PolygonSoup::from_mesh(&edited))?;
         }
     }
-    eprintln!("wrote cylinder.obj, bend.json and bent.obj to {}", out.display());
+    eprintln!(
+        "wrote cylinder.obj, bend.json and bent.obj to {}",
+        out.display()
+    );
     Ok(())
 }

@@ -78,14 +78,20 @@ fn positions_of_a_similarity_reproduce_the_transform_edit() {
             Select::Vertices(verts.clone()),
             similarity_transform(),
         ));
-        let t = EditProblem::new(&mesh, &by_transform).unwrap().spec_transforms[0];
+        let t = EditProblem::new(&mesh, &by_transform)
+            .unwrap()
+            .spec_transforms[0];
         // Listed in reverse: the positions follow the listed order.
         let mut listed = verts.clone();
         listed.reverse();
         let by_positions = spec_with(positions_handle(&mesh, &listed, |p| t.apply(p)));
         let p = EditProblem::new(&mesh, &by_positions).unwrap();
         let fit = p.spec_transforms[0];
-        assert!((fit.scale - 1.2).abs() < 1e-12, "fitted scale {}", fit.scale);
+        assert!(
+            (fit.scale - 1.2).abs() < 1e-12,
+            "fitted scale {}",
+            fit.scale
+        );
         assert!(fit.rotation.angle_to(&t.rotation) < 1e-12);
         let shape = p.handles[0].shape.as_ref().unwrap();
         for &(dq, dls) in &shape.frames {
@@ -94,7 +100,10 @@ fn positions_of_a_similarity_reproduce_the_transform_edit() {
         let a = run::<PoissonEditor>(&mesh, &by_transform, Default::default());
         let b = run::<PoissonEditor>(&mesh, &by_positions, Default::default());
         let err = rel(&b, &a);
-        println!("{} handle vertices: poisson positions vs transform {err:.3e}", verts.len());
+        println!(
+            "{} handle vertices: poisson positions vs transform {err:.3e}",
+            verts.len()
+        );
         assert!(err < 1e-9, "poisson: positions vs transform {err:e}");
         // The other methods read the same targets.
         let naive = rel(
@@ -109,7 +118,10 @@ fn positions_of_a_similarity_reproduce_the_transform_edit() {
             &run::<ImplicitEditor>(&mesh, &by_positions, Default::default()),
             &run::<ImplicitEditor>(&mesh, &by_transform, Default::default()),
         );
-        assert!(naive < 1e-9 && lse < 1e-9 && implicit < 1e-9, "{naive:e} {lse:e} {implicit:e}");
+        assert!(
+            naive < 1e-9 && lse < 1e-9 && implicit < 1e-9,
+            "{naive:e} {lse:e} {implicit:e}"
+        );
     }
 }
 
@@ -187,7 +199,10 @@ fn a_bend_given_by_positions_keeps_detail_better_than_naive_editing() {
         Vec3::new(c * p.x - s * p.y, s * p.x + c * p.y, p.z)
     };
     let cases = [
-        ("region bend", positions_handle(&mesh, &region, |p| bend(p, 90.0))),
+        (
+            "region bend",
+            positions_handle(&mesh, &region, |p| bend(p, 90.0)),
+        ),
         ("region twist", positions_handle(&mesh, &region10, twist)),
         ("curve bend+oval", positions_handle(&mesh, &top, oval)),
     ];
@@ -219,7 +234,10 @@ fn a_bend_given_by_positions_keeps_detail_better_than_naive_editing() {
              poisson fit-only {fit_only:.4e} poisson frames {poisson:.4e}"
         );
         assert!(poisson < naive, "{name}: {poisson} vs naive {naive}");
-        assert!(poisson < naive_poisson, "{name}: {poisson} vs {naive_poisson}");
+        assert!(
+            poisson < naive_poisson,
+            "{name}: {poisson} vs {naive_poisson}"
+        );
         // The handle lands on the given positions.
         let out = run::<PoissonEditor>(&mesh, &spec, Default::default());
         let shape = p.handles[0].shape.as_ref().unwrap();
@@ -288,7 +306,10 @@ fn positions_json_round_trips_and_bad_positions_are_named_errors() {
         "{e}"
     );
     let e = err(r#"{"roi": "all", "handles": [{"select": "all", "position": []}]}"#).unwrap_err();
-    assert!(matches!(&e, EditError::Spec(m) if m.contains("position")), "{e}");
+    assert!(
+        matches!(&e, EditError::Spec(m) if m.contains("position")),
+        "{e}"
+    );
     // Non-finite values cannot be written in JSON; through the library they are named.
     let mut bad = spec_with(HandleSpec::with_positions(
         Select::Vertices(vec![1600, 1601]),
@@ -312,7 +333,6 @@ fn positions_json_round_trips_and_bad_positions_are_named_errors() {
     let target = p.targets(&p.spec_transforms).unwrap()[p.local[1600]];
     assert!(target.distance(Vec3::new(1.0, 0.0, 4.5)) < 1e-15);
 }
-
 
 #[test]
 fn single_vertex_and_collinear_handles_fit_their_motion() {
@@ -339,7 +359,9 @@ fn single_vertex_and_collinear_handles_fit_their_motion() {
     // A single-vertex handle through the whole pipeline.
     let mesh = relief_cylinder();
     let top = ring(CYL.3 - 1);
-    let spec = spec_with(positions_handle(&mesh, &top[..1], |p| p + Vec3::new(0.0, 0.0, 0.3)));
+    let spec = spec_with(positions_handle(&mesh, &top[..1], |p| {
+        p + Vec3::new(0.0, 0.0, 0.3)
+    }));
     let out = run::<PoissonEditor>(&mesh, &spec, Default::default());
     let want = mesh.positions()[top[0]] + Vec3::new(0.0, 0.0, 0.3);
     assert!(out[top[0]].distance(want) < 1e-12);

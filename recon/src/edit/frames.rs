@@ -160,7 +160,7 @@ pub fn handle_shape(
     let mut normals = vec![(Vec3::ZERO, Vec3::ZERO); vertices.len()];
     for f in faces {
         let k = f.map(|l| slot.get(l).copied().unwrap_or(usize::MAX));
-        if k.iter().any(|&s| s == usize::MAX) {
+        if k.contains(&usize::MAX) {
             continue;
         }
         let n0 = triangle_normal(rest_h[k[0]], rest_h[k[1]], rest_h[k[2]]);
@@ -237,7 +237,14 @@ fn vertex_frame(
             _ => UnitQuaternion::identity(),
         }
     };
-    (rotation, if log_scale.is_finite() { log_scale } else { 0.0 })
+    (
+        rotation,
+        if log_scale.is_finite() {
+            log_scale
+        } else {
+            0.0
+        },
+    )
 }
 
 /// The tangent at rest and in the residual: the difference of the two most nearly opposite
