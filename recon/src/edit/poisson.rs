@@ -22,8 +22,9 @@
 //! frame change ([`super::frames`]). Within such a handle a free vertex takes the value of its
 //! nearest handle vertex (the paper's *Nearest* scheme, by the same edge-path distance), and
 //! that value is weighted against the other boundary conditions exactly as a transform
-//! handle's. A handle given as a rigid motion of its vertices therefore edits exactly like
-//! the equivalent transform.
+//! handle's. A handle given as a similarity of its rest positions therefore edits like the
+//! equivalent transform, to round-off. (The paper's smoother *Linear* weighting within a
+//! boundary condition would need one distance field per handle vertex.)
 
 use faer::Mat;
 use nalgebra::{UnitQuaternion, Vector3};
