@@ -96,3 +96,77 @@ fn edit_writes_mesh_png_and_one_json_line() {
     assert_eq!(r.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&r.stderr).contains("unknown field `colour`"));
 }
+
+#[test]
+fn edit_accepts_a_handle_given_as_positions() {
+    let d = dir().join("positions");
+    std::fs::create_dir_all(&d).unwrap();
+    let mesh = d.join("cyl.off");
+    write_mesh_file(
+        &mesh,
+        &PolygonSoup::from_mesh(&cylinder(1.0, 3.0, 24, 16, false)),
+    )
+    .unwrap();
+    // The top ring (z = 3) lifted by 0.5 and squeezed to an ellipse.
+    let top: Vec<usize> = (15 * 24..16 * 24).collect();
+    let pos: Vec<String> = (0..24)
+        .map(|j| {
+            let phi = 2.0 * std::f64::consts::PI * j as f64 / 24.0;
+            format!("[{}, {}, 3.5]", 1.2 * phi.cos(), 0.8 * phi.sin())
+        })
+        .collect();
+    let write = |name: &str, extra: &str| {
+        let spec = d.join(name);
+        std::fs::write(
+            &spec,
+            format!(
+                r#"{{"roi": "all", "anchors": {{"vertices": [{}]}},
+                   "handles": [{{"select": {{"vertices": {top:?}}}, "positions": [{}]{extra}}}]}}"#,
+                (0..24).map(|i| i.to_string()).collect::<Vec<_>>().join(","),
+                pos.join(",")
+            ),
+        )
+        .unwrap();
+        spec
+    };
+    let out = d.join("out.off");
+    let spec = write("spec.json", "");
+    let r = fires(&[
+        "edit",
+        "poisson",
+        mesh.to_str().unwrap(),
+        spec.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let line = String::from_utf8(r.stdout).unwrap();
+    let v: serde_json::Value = serde_json::from_str(line.trim()).unwrap();
+    assert_eq!(v["method"], "poisson");
+    assert!(v["detail_error"].as_f64().unwrap() > 0.0);
+    let edited = fires_recon::io::read_mesh_file(&out)
+        .unwrap()
+        .to_mesh()
+        .unwrap();
+    let p = edited.positions()[15 * 24 + 6];
+    assert!(
+        (p.z - 3.5).abs() < 1e-9 && (p.y - 0.8).abs() < 1e-9,
+        "{p:?}"
+    );
+    // Both a transform and positions: a named error, exit code 2.
+    let bad = write("bad.json", r#", "transform": {"scale": 2}"#);
+    let r = fires(&[
+        "edit",
+        "poisson",
+        mesh.to_str().unwrap(),
+        bad.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(r.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("handle 0 positions") && err.contains("not both"),
+        "{err}"
+    );
+}

@@ -205,7 +205,7 @@ impl ImplicitEditor {
         // Targets on the displaced geometry.
         let targets: Vec<Vec3> = (0..problem.len())
             .map(|l| match problem.role[l] {
-                Role::Handle(h) => transforms[h].apply(self.displaced[l]),
+                Role::Handle(h) => problem.handle_target(l, h, self.displaced[l], transforms),
                 _ => self.displaced[l],
             })
             .collect();
@@ -239,7 +239,9 @@ impl ImplicitEditor {
                         out[l] = xd[l] + mat_vec(&self.gradient_of(l, &xd), off);
                     }
                 }
-                Role::Handle(h) => out[l] = transforms[h].apply(problem.rest[l]),
+                Role::Handle(h) => {
+                    out[l] = problem.handle_target(l, h, problem.rest[l], transforms)
+                }
                 _ => out[l] = problem.rest[l],
             }
         }

@@ -90,6 +90,51 @@ pub fn graph_distance(p: &EditProblem, sources: &[usize]) -> Vec<f64> {
     })
 }
 
+/// Shortest edge-path distance over the local graph from `sources` and, per vertex, the
+/// position in `sources` of its nearest source (`usize::MAX` if unreachable).
+pub fn graph_distance_nearest(p: &EditProblem, sources: &[usize]) -> (Vec<f64>, Vec<usize>) {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    #[derive(PartialEq)]
+    struct Key(f64);
+    impl Eq for Key {}
+    impl PartialOrd for Key {
+        fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+            Some(self.cmp(o))
+        }
+    }
+    impl Ord for Key {
+        fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+            self.0.total_cmp(&o.0)
+        }
+    }
+    let n = p.len();
+    let mut dist = vec![f64::INFINITY; n];
+    let mut label = vec![usize::MAX; n];
+    let mut heap = BinaryHeap::new();
+    for (k, &s) in sources.iter().enumerate() {
+        if s < n && dist[s] > 0.0 {
+            dist[s] = 0.0;
+            label[s] = k;
+            heap.push(Reverse((Key(0.0), s)));
+        }
+    }
+    while let Some(Reverse((Key(d), i))) = heap.pop() {
+        if d > dist[i] {
+            continue;
+        }
+        for &j in &p.neighbors[i] {
+            let nd = d + p.rest[i].distance(p.rest[j]);
+            if nd < dist[j] {
+                dist[j] = nd;
+                label[j] = label[i];
+                heap.push(Reverse((Key(nd), j)));
+            }
+        }
+    }
+    (dist, label)
+}
+
 /// Positions as an `n × 3` faer matrix.
 pub fn to_mat(x: &[Vec3]) -> faer::Mat<f64> {
     faer::Mat::from_fn(x.len(), 3, |i, c| x[i][c])

@@ -297,6 +297,11 @@ impl LseEditor {
         transforms: &[Similarity],
     ) -> Result<Vec<Vec3>, EditError> {
         problem.check_transforms(transforms)?;
+        if problem.handles.iter().any(|h| h.shape.is_some()) {
+            return Err(EditError::Spec(
+                "the affine basis covers transform handles only, not positions".into(),
+            ));
+        }
         let mut x = basis.base.clone();
         for (t, per) in transforms.iter().zip(&basis.responses) {
             let a = t.linear();

@@ -1,6 +1,8 @@
 //! Differential mesh editing (issue 16): one shared core and one file per method.
 //!
-//! * [`spec`]: the JSON edit specification (ROI, anchors, handles with transforms);
+//! * [`spec`]: the JSON edit specification (ROI, anchors, handles with transforms or
+//!   explicit positions);
+//! * [`frames`]: local frames of handles given as positions (Yu et al. 2004, §3.3);
 //! * [`problem`]: the specification resolved on a mesh, in a local numbering;
 //! * [`system`]: a quadratic energy with fixed entries, factored once, solved per move;
 //! * [`session`]: [`EditSession`], which keeps a method's factorisation and refactors only
@@ -13,6 +15,7 @@
 pub mod coating;
 pub mod denoise;
 pub mod detail_error;
+pub mod frames;
 pub mod implicit;
 pub mod local;
 pub mod lse;
@@ -27,6 +30,7 @@ pub mod system;
 pub mod transplant;
 
 pub use detail_error::detail_error;
+pub use frames::{fit_similarity, HandleShape};
 pub use implicit::{ImplicitEditor, ImplicitOptions};
 pub use lse::{LseEditor, LseOptions};
 pub use naive::{NaiveLaplacian, NaiveOptions};
@@ -86,6 +90,15 @@ pub enum EditError {
     /// A transform or weight is invalid.
     #[error("handle {handle}: {reason}")]
     BadTransform {
+        /// Handle number.
+        handle: usize,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A handle's explicit positions are invalid (count, order, finiteness, or given together
+    /// with a transform).
+    #[error("handle {handle} positions: {reason}")]
+    BadPositions {
         /// Handle number.
         handle: usize,
         /// What is wrong.

@@ -16,11 +16,22 @@
 //! over the ROI (a documented substitute for the paper's fast-marching distance; both are
 //! only used as weights). A single handle rotated by θ therefore rotates a free vertex by
 //! `θ·d₀/(d₀ + d_h)`.
+//!
+//! Boundary-condition editing with local frames (§3.3, §4.1): a handle given as explicit
+//! positions has one frame change per vertex, its fitted similarity times the vertex's local
+//! frame change ([`super::frames`]). Within such a handle a free vertex takes the value of its
+//! nearest handle vertex (the paper's *Nearest* scheme, by the same edge-path distance), and
+//! that value is weighted against the other boundary conditions exactly as a transform
+//! handle's. A handle given as a similarity of its rest positions therefore edits like the
+//! equivalent transform, to round-off. (The paper's smoother *Linear* weighting within a
+//! boundary condition would need one distance field per handle vertex.)
 
 use faer::Mat;
 use nalgebra::{UnitQuaternion, Vector3};
 
-use super::local::{cotan_stiffness, face_gradients, from_mat, gather, graph_distance};
+use super::local::{
+    cotan_stiffness, face_gradients, from_mat, gather, graph_distance, graph_distance_nearest,
+};
 use super::problem::{EditProblem, Role};
 use super::session::EditMethod;
 use super::similarity::{mat_vec, weighted_average, Mat3, Similarity};
@@ -50,6 +61,8 @@ pub struct PoissonEditor {
     grads: Vec<Option<(f64, [Vec3; 3])>>,
     /// Per local vertex: normalised weights of [fixed, handle 0, handle 1, ...].
     weights: Vec<Vec<f64>>,
+    /// Per handle, per local vertex: the position in the handle of its nearest handle vertex.
+    nearest: Vec<Vec<usize>>,
     options: PoissonOptions,
 }
 
@@ -81,12 +94,26 @@ impl PoissonEditor {
         Ok(from_mat(x.as_ref()))
     }
 
-    /// The per-vertex rotation and log-scale propagated from the handle transforms.
+    /// The per-vertex rotation and log-scale propagated from the handle transforms (and,
+    /// for handles given as positions, their per-vertex local frames).
     pub fn vertex_transforms(
         &self,
         problem: &EditProblem,
         transforms: &[Similarity],
     ) -> Vec<(UnitQuaternion<f64>, f64)> {
+        // The value of handle h seen from local vertex l.
+        let value = |h: usize, l: usize| -> (UnitQuaternion<f64>, f64) {
+            let (q, ls) = (transforms[h].rotation, transforms[h].scale.ln());
+            let frame = problem.handles[h]
+                .shape
+                .as_ref()
+                .zip(self.nearest.get(h).and_then(|n| n.get(l)))
+                .and_then(|(s, &k)| s.frames.get(k));
+            match frame {
+                Some(&(dq, dls)) => (q * dq, ls + dls),
+                None => (q, ls),
+            }
+        };
         // One handle: slerp(1, q_h; λ) is the rotation about q_h's axis by λ·θ_h.
         let single = (transforms.len() == 1).then(|| {
             let (axis, angle) = transforms[0]
@@ -95,14 +122,22 @@ impl PoissonEditor {
                 .map_or((Vector3::z_axis(), 0.0), |(a, t)| (a, t));
             (axis, angle, transforms[0].scale.ln())
         });
+        let per_vertex = problem.handles.first().is_some_and(|h| h.shape.is_some());
         (0..problem.len())
             .map(|l| match problem.role[l] {
-                Role::Handle(h) => (transforms[h].rotation, transforms[h].scale.ln()),
+                Role::Handle(h) => value(h, l),
                 Role::Ring | Role::Anchor => (UnitQuaternion::identity(), 0.0),
                 Role::Free if !self.options.propagate => (UnitQuaternion::identity(), 0.0),
                 Role::Free => {
                     let w = &self.weights[l];
                     if let Some((axis, angle, log_s)) = single {
+                        let (axis, angle, log_s) = if per_vertex {
+                            let (q, ls) = value(0, l);
+                            let (a, t) = q.axis_angle().map_or((Vector3::z_axis(), 0.0), |x| x);
+                            (a, t, ls)
+                        } else {
+                            (axis, angle, log_s)
+                        };
                         return (
                             UnitQuaternion::from_axis_angle(&axis, w[1] * angle),
                             w[1] * log_s,
@@ -111,9 +146,10 @@ impl PoissonEditor {
                     let mut items = Vec::with_capacity(w.len());
                     items.push((UnitQuaternion::identity(), w[0]));
                     let mut log_s = 0.0;
-                    for (h, t) in transforms.iter().enumerate() {
-                        items.push((t.rotation, w[h + 1]));
-                        log_s += w[h + 1] * t.scale.ln();
+                    for h in 0..transforms.len() {
+                        let (q, ls) = value(h, l);
+                        items.push((q, w[h + 1]));
+                        log_s += w[h + 1] * ls;
                     }
                     (weighted_average(&items), log_s)
                 }
@@ -165,8 +201,11 @@ impl EditMethod for PoissonEditor {
             .filter(|&l| matches!(problem.role[l], Role::Ring | Role::Anchor))
             .collect();
         let mut dists = vec![graph_distance(problem, &fixed)];
+        let mut nearest = Vec::with_capacity(problem.handles.len());
         for h in &problem.handles {
-            dists.push(graph_distance(problem, &h.vertices));
+            let (d, near) = graph_distance_nearest(problem, &h.vertices);
+            dists.push(d);
+            nearest.push(near);
         }
         let weights = (0..problem.len())
             .map(|l| {
@@ -186,6 +225,7 @@ impl EditMethod for PoissonEditor {
             solver,
             grads,
             weights,
+            nearest,
             options: *options,
         })
     }

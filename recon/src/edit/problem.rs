@@ -6,9 +6,16 @@
 //! every method. User anchors inside the ROI are hard for the hard-constraint methods and
 //! soft (weighted) for Laplacian surface editing. Every ROI vertex has its full 1-ring in
 //! the local set, so every per-vertex stencil of an ROI vertex is local.
+//!
+//! A handle given as explicit positions is resolved to its best-fit similarity (its entry in
+//! [`EditProblem::spec_transforms`]) plus a [`HandleShape`]: the non-rigid residual and the
+//! per-vertex local frame changes ([`super::frames`]). Moving such a handle by a transform
+//! `S` places the residual shape by `S`; with the specification's own transform the handle
+//! lands on the given positions (to round-off).
 
+use super::frames::{handle_shape, HandleShape};
 use super::similarity::Similarity;
-use super::spec::EditSpec;
+use super::spec::{EditSpec, HandleSpec, Select};
 use super::EditError;
 use crate::geometry::Vec3;
 use crate::mesh::{SurfaceMesh, Vertex};
@@ -41,6 +48,8 @@ pub struct HandleSet {
     pub fix_gradient: bool,
     /// Rest centroid (the default fixed point of its transform).
     pub centroid: Vec3,
+    /// For a handle given as explicit positions: targets, residual and local frames.
+    pub shape: Option<HandleShape>,
 }
 
 /// The ROI, ring, anchors and handles of an edit in local numbering.
@@ -64,8 +73,12 @@ pub struct EditProblem {
     pub handles: Vec<HandleSet>,
     /// Soft-constraint weight of anchors.
     pub anchor_weight: f64,
-    /// The transforms given in the specification (one per handle).
+    /// The transforms given in the specification (one per handle; the best-fit similarity
+    /// for a handle given as positions).
     pub spec_transforms: Vec<Similarity>,
+    /// Per local vertex: the residual offset of a positions handle's vertex (zero elsewhere);
+    /// a handle vertex's target under `S` is `S(rest + offset)`.
+    pub offset: Vec<Vec3>,
 }
 
 impl EditProblem {
@@ -112,6 +125,7 @@ impl EditProblem {
         }
         let mut handles = Vec::with_capacity(spec.handles.len());
         let mut spec_transforms = Vec::with_capacity(spec.handles.len());
+        let mut pending = Vec::new();
         for (h, hs) in spec.handles.iter().enumerate() {
             let verts = hs.select.resolve(mesh)?;
             if verts.is_empty() {
@@ -154,12 +168,19 @@ impl EditProblem {
                 centroid += mesh.position(Vertex::new(g));
             }
             centroid = centroid / verts.len() as f64;
-            spec_transforms.push(hs.transform.to_similarity(centroid, h)?);
+            match ordered_positions(hs, &verts, h)? {
+                Some(pos) => {
+                    pending.push((h, pos));
+                    spec_transforms.push(Similarity::identity());
+                }
+                None => spec_transforms.push(hs.transform.to_similarity(centroid, h)?),
+            }
             handles.push(HandleSet {
                 vertices: lv,
                 weight: hs.weight,
                 fix_gradient: hs.fix_gradient,
                 centroid,
+                shape: None,
             });
         }
         if !(spec.anchor_weight.is_finite() && spec.anchor_weight > 0.0) {
@@ -171,7 +192,7 @@ impl EditProblem {
             return Err(EditError::NothingFixed);
         }
         let rest: Vec<Vec3> = global.iter().map(|&g| mesh.positions()[g]).collect();
-        let neighbors = global
+        let neighbors: Vec<Vec<usize>> = global
             .iter()
             .map(|&g| {
                 mesh.vertex_vertices(Vertex::new(g))
@@ -184,7 +205,17 @@ impl EditProblem {
             .iter()
             .filter(|t| t.iter().any(|&g| in_roi[g]))
             .map(|t| t.map(|g| local[g]))
-            .collect();
+            .collect::<Vec<_>>();
+        let mut offset = vec![Vec3::ZERO; global.len()];
+        for (h, pos) in pending {
+            let hs = &mut handles[h];
+            let (fit, shape) = handle_shape(&hs.vertices, pos, &rest, &neighbors, &faces, h)?;
+            for (&l, &o) in hs.vertices.iter().zip(&shape.offset) {
+                offset[l] = o;
+            }
+            spec_transforms[h] = fit;
+            hs.shape = Some(shape);
+        }
         Ok(Self {
             global,
             local,
@@ -196,6 +227,7 @@ impl EditProblem {
             handles,
             anchor_weight: spec.anchor_weight,
             spec_transforms,
+            offset,
         })
     }
 
@@ -232,10 +264,16 @@ impl EditProblem {
         self.check_transforms(transforms)?;
         Ok((0..self.len())
             .map(|l| match self.role[l] {
-                Role::Handle(h) => transforms[h].apply(self.rest[l]),
+                Role::Handle(h) => self.handle_target(l, h, self.rest[l], transforms),
                 _ => self.rest[l],
             })
             .collect())
+    }
+
+    /// Target of handle `h`'s local vertex `l` placed at `x` (its rest position, or a
+    /// displaced one) under the handle transforms: `S_h(x + offset_l)`.
+    pub fn handle_target(&self, l: usize, h: usize, x: Vec3, transforms: &[Similarity]) -> Vec3 {
+        transforms[h].apply(x + self.offset[l])
     }
 
     /// Fails unless there is one transform per handle.
@@ -273,4 +311,51 @@ impl EditProblem {
             s / c as f64
         }
     }
+}
+
+/// A handle's explicit positions in the order of its resolved (ascending) vertices, or
+/// `None` for a transform handle. With `{"vertices": [...]}` the positions follow the listed
+/// order; otherwise ascending vertex index.
+fn ordered_positions(
+    hs: &HandleSpec,
+    verts: &[usize],
+    h: usize,
+) -> Result<Option<Vec<Vec3>>, EditError> {
+    let Some(pos) = &hs.positions else {
+        return Ok(None);
+    };
+    let bad = |reason: String| EditError::BadPositions { handle: h, reason };
+    if !hs.transform.is_identity() {
+        return Err(bad("give either a transform or positions, not both".into()));
+    }
+    if let Some(k) = pos.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
+        return Err(bad(format!("positions[{k}] is not finite")));
+    }
+    let listed: &[usize] = match &hs.select {
+        Select::Vertices(list) => list,
+        _ => verts,
+    };
+    if pos.len() != listed.len() {
+        return Err(bad(format!(
+            "{} positions for {} selected vertices",
+            pos.len(),
+            listed.len()
+        )));
+    }
+    let mut by_vertex = std::collections::HashMap::with_capacity(listed.len());
+    for (&g, p) in listed.iter().zip(pos) {
+        if by_vertex.insert(g, Vec3::from_array(*p)).is_some() {
+            return Err(bad(format!("vertex {g} is listed twice")));
+        }
+    }
+    verts
+        .iter()
+        .map(|g| {
+            by_vertex
+                .get(g)
+                .copied()
+                .ok_or_else(|| bad(format!("vertex {g} has no position")))
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map(Some)
 }

@@ -187,12 +187,10 @@ pub fn bench_spec(mesh: &SurfaceMesh, roi_fraction: f64) -> Result<EditSpec, Edi
         roi,
         anchors,
         anchor_weight: 1.0,
-        handles: vec![HandleSpec {
-            select: Select::Vertices(order[..h].to_vec()),
-            weight: 1.0,
-            fix_gradient: false,
-            transform: TransformSpec::default(),
-        }],
+        handles: vec![HandleSpec::with_transform(
+            Select::Vertices(order[..h].to_vec()),
+            TransformSpec::default(),
+        )],
     })
 }
 

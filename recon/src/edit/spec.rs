@@ -12,6 +12,13 @@
 //! rotation, both about `about` (default: the handle's centroid), then translation; every
 //! part is optional. `anchors` defaults to the ring of vertices just outside the ROI.
 //! Unknown keys are errors (`deny_unknown_fields`).
+//!
+//! Instead of a `transform`, a handle may give its target as explicit positions, one per
+//! selected vertex: `{"select": {"vertices": [7, 3, 9]}, "positions": [[x, y, z], ...]}`.
+//! With `{"vertices": [...]}` the positions follow the listed order; with any other
+//! selection they follow ascending vertex index. Such a handle may be deformed
+//! non-rigidly; its rotation and scale come from local frames (see [`super::frames`]).
+//! The full format is documented in the repository's `docs/edit-spec.md`.
 
 use serde::{Deserialize, Serialize};
 
@@ -107,6 +114,11 @@ pub struct TransformSpec {
 }
 
 impl TransformSpec {
+    /// True when no part is given (the identity; also what an absent `transform` means).
+    pub fn is_identity(&self) -> bool {
+        *self == TransformSpec::default()
+    }
+
     /// The transform as a [`Similarity`], with `centroid` as the default fixed point.
     pub fn to_similarity(&self, centroid: Vec3, handle: usize) -> Result<Similarity, EditError> {
         let bad = |why: &str| EditError::BadTransform {
@@ -151,7 +163,7 @@ fn one() -> f64 {
     1.0
 }
 
-/// One handle: a vertex set inside the ROI moved by a transform.
+/// One handle: a vertex set inside the ROI moved by a transform or to explicit positions.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct HandleSpec {
@@ -164,9 +176,37 @@ pub struct HandleSpec {
     /// (implicit editing).
     #[serde(default)]
     pub fix_gradient: bool,
-    /// The handle's transform (default: identity).
-    #[serde(default)]
+    /// The handle's transform (default: identity). Absent or empty when `positions` is
+    /// given.
+    #[serde(default, skip_serializing_if = "TransformSpec::is_identity")]
     pub transform: TransformSpec,
+    /// Explicit target positions, one per selected vertex (the listed order for
+    /// `{"vertices": [...]}`, ascending vertex index otherwise), as an alternative to
+    /// `transform`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub positions: Option<Vec<[f64; 3]>>,
+}
+
+impl HandleSpec {
+    /// A handle moved by `transform`.
+    pub fn with_transform(select: Select, transform: TransformSpec) -> Self {
+        Self {
+            select,
+            weight: 1.0,
+            fix_gradient: false,
+            transform,
+            positions: None,
+        }
+    }
+
+    /// A handle whose vertices go to explicit `positions` (in the order described at
+    /// [`HandleSpec::positions`]).
+    pub fn with_positions(select: Select, positions: Vec<[f64; 3]>) -> Self {
+        Self {
+            positions: Some(positions),
+            ..Self::with_transform(select, TransformSpec::default())
+        }
+    }
 }
 
 /// A complete edit: region of interest, anchors and handles.

@@ -35,18 +35,16 @@ pub fn twist_spec(deg: f64) -> EditSpec {
         roi: Select::All,
         anchors: Some(Select::Vertices(ring(0))),
         anchor_weight: 1.0,
-        handles: vec![HandleSpec {
-            select: Select::Vertices(ring(CYL.3 - 1)),
-            weight: 1.0,
-            fix_gradient: false,
-            transform: TransformSpec {
+        handles: vec![HandleSpec::with_transform(
+            Select::Vertices(ring(CYL.3 - 1)),
+            TransformSpec {
                 rotate: Some(RotateSpec {
                     axis: [0.0, 0.0, 1.0],
                     deg,
                 }),
                 ..Default::default()
             },
-        }],
+        )],
     }
 }
 
