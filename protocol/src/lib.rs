@@ -22,7 +22,7 @@ pub use decoder::{Decoded, DecoderStats, StreamDecoder};
 pub use frame::{Frame, FrameError};
 pub use scale::ScaleFactors;
 pub use sensor::SensorPacket;
-pub use status::{Buttons, Health, StateFlags, StatusPacket, StatusReason};
+pub use status::{Buttons, Health, StateFlags, StatusPacket, StatusReason, BUTTON_REPEAT_AFTER_US};
 
 /// Length of every pen -> host frame, in bytes.
 pub const FRAME_LEN: usize = 22;

@@ -101,6 +101,9 @@ impl Health {
     }
 }
 
+/// How long after a button change its repeats are sent, microseconds ([`StatusReason::ButtonRepeat`]).
+pub const BUTTON_REPEAT_AFTER_US: [u32; 2] = [30_000, 100_000];
+
 /// Why the pen sent a status packet (byte 11).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -115,11 +118,26 @@ pub enum StatusReason {
     Requested,
     /// The first packet after power-on or reset.
     Boot,
+    /// The latest button change told again, [`BUTTON_REPEAT_AFTER_US`]`[n]` after it (`n` = 0, 1; wire
+    /// values 4, 5), so that one lost change packet neither delays a stroke to the next periodic report nor
+    /// loses it (hardware-docs/protocol.md §1.2). Bytes 3–7 are the latest sample's, as in every status
+    /// packet; the change happened that long before it.
+    ButtonRepeat(u8),
     /// A value this decoder does not know (sent by a newer firmware).
     Unknown(u8),
 }
 
 impl StatusReason {
+    /// How long before this packet's sample the buttons it reports changed, microseconds: 0 for a
+    /// button change, the repeat's delay for a repeat, `None` for other reasons.
+    pub fn button_change_age_us(self) -> Option<u32> {
+        match self {
+            StatusReason::ButtonChange => Some(0),
+            StatusReason::ButtonRepeat(n) => BUTTON_REPEAT_AFTER_US.get(usize::from(n)).copied(),
+            _ => None,
+        }
+    }
+
     /// The wire value.
     pub fn to_byte(self) -> u8 {
         match self {
@@ -127,6 +145,7 @@ impl StatusReason {
             StatusReason::ButtonChange => 1,
             StatusReason::Requested => 2,
             StatusReason::Boot => 3,
+            StatusReason::ButtonRepeat(n) => 4 + n.min(1),
             StatusReason::Unknown(b) => b,
         }
     }
@@ -137,6 +156,8 @@ impl StatusReason {
             1 => StatusReason::ButtonChange,
             2 => StatusReason::Requested,
             3 => StatusReason::Boot,
+            4 => StatusReason::ButtonRepeat(0),
+            5 => StatusReason::ButtonRepeat(1),
             other => StatusReason::Unknown(other),
         }
     }

@@ -9,8 +9,8 @@
 
 use crate::rng::SimRng;
 use fires_protocol::{
-    Buttons, Frame, Health, SensorPacket, StateFlags, StatusPacket, StatusReason, FRAME_LEN,
-    LINK_BAUD, PROTOCOL_VERSION,
+    Buttons, Frame, Health, SensorPacket, StateFlags, StatusPacket, StatusReason,
+    BUTTON_REPEAT_AFTER_US, FRAME_LEN, LINK_BAUD, PROTOCOL_VERSION,
 };
 use fires_record::{Interval, LinkChunk, PacketFate, PacketTruth};
 
@@ -83,6 +83,9 @@ pub struct PenFirmware {
     next_status_us: u64,
     status_period_us: u64,
     battery_mv: f64,
+    /// Device time of the latest button change and the repeats of it sent (as the firmware's
+    /// `StatusReporter`: [`BUTTON_REPEAT_AFTER_US`] later).
+    repeat: Option<(u64, usize)>,
 }
 
 impl PenFirmware {
@@ -96,6 +99,7 @@ impl PenFirmware {
             next_status_us: 0,
             status_period_us: (status_period_s * 1e6).round().max(1.0) as u64,
             battery_mv: 3950.0,
+            repeat: None,
         }
     }
 
@@ -164,12 +168,27 @@ impl PenFirmware {
             None
         };
         self.buttons = Some(buttons);
+        if let Some((at, sent)) = self.repeat {
+            let due = BUTTON_REPEAT_AFTER_US.get(sent).map(|&d| at + u64::from(d));
+            if due.is_some_and(|due| device_time_us >= due) {
+                self.repeat = Some((at, sent + 1));
+                let p = self.status(StatusReason::ButtonRepeat(sent as u8), buttons, connected);
+                out.push(Produced {
+                    t_ready: ready + 5e-5,
+                    frame: Frame::Status(p),
+                    pen_dropped: false,
+                });
+            }
+        }
         if let Some(reason) = reason {
             if reason == StatusReason::Periodic || device_time_us >= self.next_status_us {
                 self.next_status_us += self.status_period_us;
             }
             self.battery_mv -= 0.05;
             let p = self.status(reason, buttons, connected);
+            if reason == StatusReason::ButtonChange {
+                self.repeat = Some((device_time_us, 0));
+            }
             out.push(Produced {
                 t_ready: ready + 1e-4,
                 frame: Frame::Status(p),
@@ -322,6 +341,7 @@ mod tests {
         let mut last_sent: Option<u8> = None;
         let mut seq = 0u8;
         let mut reasons = Vec::new();
+        let mut last_change = None;
         for p in &out {
             match p.frame {
                 Frame::Sensor(s) if !p.pen_dropped => last_sent = Some(s.counter),
@@ -330,6 +350,17 @@ mod tests {
                     assert_eq!(s.sequence, seq);
                     seq = seq.wrapping_add(1);
                     assert_eq!(s.sensor_counter, last_sent.unwrap_or(0xFF));
+                    if let StatusReason::ButtonRepeat(n) = s.reason {
+                        // 30 and 100 ms after the change (about 3 and 10 samples), same buttons.
+                        let (c, b) = last_change.expect("a change before its repeat");
+                        let after = s.sensor_counter.wrapping_sub(c);
+                        let range = [2..=4u8, 8..=11][usize::from(n)].clone();
+                        assert!(range.contains(&after), "repeat {n} {after} samples after");
+                        assert_eq!(s.buttons, b);
+                    }
+                    if s.reason == StatusReason::ButtonChange {
+                        last_change = Some((s.sensor_counter, s.buttons));
+                    }
                     reasons.push((s.reason, s.buttons.0));
                 }
             }
@@ -342,9 +373,15 @@ mod tests {
             .collect();
         assert_eq!(changes.len(), 2);
         assert_eq!((changes[0].1, changes[1].1), (1, 0));
+        // Each change is sent twice more, 30 ms and 100 ms later (3 and 10 samples at 100 Hz).
+        let repeats = reasons
+            .iter()
+            .filter(|r| matches!(r.0, StatusReason::ButtonRepeat(_)))
+            .count();
+        assert_eq!(repeats, 4);
         assert_eq!(
             reasons.len(),
-            1 + 4 + 2 - 1,
+            1 + 4 + 2 - 1 + 4,
             "the button change at 1 s also serves as that second's report"
         );
     }

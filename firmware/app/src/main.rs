@@ -541,6 +541,16 @@ async fn control_task(
                 handle_effects(fx, &mut power_hold).await;
             }
         }
+        // Repeats of the latest button change (hardware-docs/protocol.md §1.2).
+        if connected {
+            SHARED.lock(|s| {
+                if let Some(s) = s.borrow_mut().as_mut() {
+                    let inputs = s.inputs;
+                    let Shared { framer, status, .. } = s;
+                    status.send_repeat(&inputs, framer, now, &mut FrameTx);
+                }
+            });
+        }
         // Auto-off
         let fx = ctl.poll(now);
         handle_effects(fx, &mut power_hold).await;
@@ -548,7 +558,10 @@ async fn control_task(
         let status_next = SHARED.lock(|s| {
             s.borrow()
                 .as_ref()
-                .map_or(now + Duration::from_secs(1), |s| s.status.next_periodic())
+                .map_or(now + Duration::from_secs(1), |s| {
+                    let p = s.status.next_periodic();
+                    s.status.next_repeat().map_or(p, |r| r.min(p))
+                })
         });
         let mut wake = status_next.min(ctl.next_deadline());
         if let Some(t) = led_next {

@@ -9,7 +9,7 @@
 //! | status request                 | a status packet now ([`StatusReason::Requested`])                    |
 //! | link connected                 | short buzz                                                           |
 //! | link dropped                   | STREAMING -> IDLE, IR LEDs off, two buzzes                           |
-//! | button change                  | a status packet now ([`StatusReason::ButtonChange`])                 |
+//! | button change                  | a status packet now ([`StatusReason::ButtonChange`]), repeated 30 ms and 100 ms later |
 //! | power button held 5 s          | turn off (any state)                                                 |
 //! | 2 min in IDLE without activity | turn off                                                             |
 //! | battery critical               | turn off (any state)                                                 |

@@ -1,17 +1,29 @@
-//! Status packets: once per second, immediately on any button change, on the host's request, and once at boot.
+//! Status packets: once per second, immediately on any button change (repeated [`BUTTON_REPEATS`] later), on
+//! the host's request, and once at boot.
 //!
 //! A status packet goes through the same [`FrameSink`] as the sensor packets, after whatever was queued before
 //! it, and carries the counter (and device time) of the latest sensor packet *sent* ([`Framer`]); its sequence
 //! number advances by one per status packet built, whether or not the sink took it.
 
 use embassy_time::{Duration, Instant};
-use fires_protocol::{Buttons, Health, StateFlags, StatusPacket, StatusReason, PROTOCOL_VERSION};
+use fires_protocol::{
+    Buttons, Health, StateFlags, StatusPacket, StatusReason, BUTTON_REPEAT_AFTER_US,
+    PROTOCOL_VERSION,
+};
 
 use crate::board::FIRMWARE_VERSION;
 use crate::sampler::{FrameSink, Framer};
 
 /// Period of the periodic status packet.
 pub const STATUS_PERIOD: Duration = Duration::from_secs(1);
+
+/// When a button change is told again, after the change ([`StatusReason::ButtonRepeat`],
+/// [`fires_protocol::BUTTON_REPEAT_AFTER_US`]): a lost change packet then costs nothing, not up to a
+/// periodic report's second of the stroke (hardware-docs/protocol.md §1.2).
+pub const BUTTON_REPEATS: [Duration; 2] = [
+    Duration::from_micros(BUTTON_REPEAT_AFTER_US[0] as u64),
+    Duration::from_micros(BUTTON_REPEAT_AFTER_US[1] as u64),
+];
 
 /// Device state a status packet reports.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -32,6 +44,8 @@ pub struct StatusReporter {
     sequence: u8,
     next_periodic: Instant,
     refused: u32,
+    /// When the latest button change was sent, and how many of its repeats went out.
+    repeat: Option<(Instant, usize)>,
 }
 
 impl StatusReporter {
@@ -41,7 +55,49 @@ impl StatusReporter {
             sequence: 0,
             next_periodic: now + STATUS_PERIOD,
             refused: 0,
+            repeat: None,
         }
+    }
+
+    /// When the next repeat of the latest button change is due, if one is.
+    pub fn next_repeat(&self) -> Option<Instant> {
+        let (at, sent) = self.repeat.as_ref()?;
+        BUTTON_REPEATS.get(*sent).map(|&d| *at + d)
+    }
+
+    /// Whether a repeat of the latest button change is due.
+    pub fn repeat_due(&self, now: Instant) -> bool {
+        self.next_repeat().is_some_and(|t| now >= t)
+    }
+
+    /// Sends the due repeat of the latest button change (a status packet of the current state with
+    /// [`StatusReason::ButtonRepeat`]); `false` if none is due or the sink refused it.
+    pub fn send_repeat(
+        &mut self,
+        inputs: &StatusInputs,
+        framer: &Framer,
+        now: Instant,
+        sink: &mut impl FrameSink,
+    ) -> bool {
+        if !self.repeat_due(now) {
+            return false;
+        }
+        let Some((_, sent)) = self.repeat.as_mut() else {
+            return false;
+        };
+        let n = *sent as u8;
+        *sent += 1;
+        let p = self.build(
+            StatusReason::ButtonRepeat(n),
+            inputs,
+            framer,
+            now.as_micros() as u32,
+        );
+        let ok = sink.try_send(&p.encode());
+        if !ok {
+            self.refused = self.refused.wrapping_add(1);
+        }
+        ok
     }
 
     /// Whether the periodic packet is due.
@@ -107,6 +163,9 @@ impl StatusReporter {
             self.skip_periodic(now);
         }
         let p = self.build(reason, inputs, framer, now.as_micros() as u32);
+        if reason == StatusReason::ButtonChange {
+            self.repeat = Some((now, 0));
+        }
         let ok = sink.try_send(&p.encode());
         if !ok {
             self.refused = self.refused.wrapping_add(1);
@@ -129,6 +188,54 @@ mod tests {
             self.0.push(*f);
             true
         }
+    }
+
+    #[test]
+    fn a_button_change_is_repeated_twice() {
+        let t0 = Instant::from_millis(5_000);
+        let mut r = StatusReporter::new(t0);
+        let mut f = Framer::new();
+        let mut sink = All(Vec::new());
+        let inputs = StatusInputs {
+            buttons: Buttons(1),
+            ..Default::default()
+        };
+        assert!(!r.repeat_due(t0) && r.next_repeat().is_none());
+        r.send(StatusReason::ButtonChange, &inputs, &f, t0, &mut sink);
+        assert_eq!(r.next_repeat(), Some(t0 + BUTTON_REPEATS[0]));
+        let early = t0 + Duration::from_millis(29);
+        assert!(!r.send_repeat(&inputs, &f, early, &mut sink));
+        // A sample in between: the repeat names it, keeping the continuation rule.
+        f.sensor(&ImuSample::default(), 1234, &mut sink);
+        assert!(r.send_repeat(&inputs, &f, t0 + Duration::from_millis(30), &mut sink));
+        assert_eq!(r.next_repeat(), Some(t0 + BUTTON_REPEATS[1]));
+        assert!(r.send_repeat(&inputs, &f, t0 + Duration::from_millis(150), &mut sink));
+        assert!(r.next_repeat().is_none());
+        assert!(!r.send_repeat(&inputs, &f, t0 + Duration::from_secs(5), &mut sink));
+        let statuses: Vec<StatusPacket> = sink
+            .0
+            .iter()
+            .filter_map(|b| match Frame::parse(b) {
+                Ok(Frame::Status(s)) => Some(s),
+                _ => None,
+            })
+            .collect();
+        let reasons: Vec<StatusReason> = statuses.iter().map(|s| s.reason).collect();
+        assert_eq!(
+            reasons,
+            [
+                StatusReason::ButtonChange,
+                StatusReason::ButtonRepeat(0),
+                StatusReason::ButtonRepeat(1)
+            ]
+        );
+        assert_eq!(statuses[1].sensor_counter, 0);
+        assert_eq!(statuses[1].device_time_us, 1234);
+        assert!(statuses.iter().all(|s| s.buttons == Buttons(1)));
+        // A newer change replaces the pending repeats.
+        let later = t0 + Duration::from_secs(6);
+        r.send(StatusReason::ButtonChange, &inputs, &f, later, &mut sink);
+        assert_eq!(r.next_repeat(), Some(later + BUTTON_REPEATS[0]));
     }
 
     #[test]

@@ -41,12 +41,24 @@ pub(crate) fn unwrap_counter(
     k.max(k0 + 1)
 }
 
-/// How many samples before the last decoded sensor packet the status's named counter lies (0 normally).
-pub(crate) fn prev_counter_gap(prev: Option<(i64, u64)>, sensor_counter: u8) -> u8 {
+/// How many samples before the last decoded sensor packet the status's named counter lies: 0 normally,
+/// negative when the sensor packet the status names was lost on the link (the status then names a later
+/// counter than any decoded one; read modulo 256 that was a gap of 255, which put a pen-up 2.5 s early,
+/// before its own pen-down, and lost the stroke).
+pub(crate) fn prev_counter_gap(prev: Option<(i64, u64)>, sensor_counter: u8) -> i8 {
     match prev {
-        Some((k, _)) => (k.rem_euclid(256) as u8).wrapping_sub(sensor_counter),
+        Some((k, _)) => (k.rem_euclid(256) as u8).wrapping_sub(sensor_counter) as i8,
         None => 0,
     }
+}
+
+/// Samples between a button change and the status packet that reports it: 0 for the change packet,
+/// the repeat's delay for a repeat (hardware-docs/protocol.md §1.2), 0 when unknown (a periodic report of
+/// a change whose packets were all lost).
+pub(crate) fn change_age_samples(reason: fires_protocol::StatusReason, period_ns: f64) -> i64 {
+    reason
+        .button_change_age_us()
+        .map_or(0, |us| (f64::from(us) * 1e3 / period_ns).round() as i64)
 }
 
 /// A timed event from the link.
@@ -150,7 +162,8 @@ impl LiveImuTimer {
                 let t_ns = match self.prev {
                     Some((k, _)) => {
                         let gap = i64::from(prev_counter_gap(self.prev, s.sensor_counter));
-                        self.grid_time(k - gap)
+                        let age = change_age_samples(s.reason, self.period_ns);
+                        self.grid_time(k - gap - age)
                             .min(self.last_t_ns.unwrap_or(u64::MAX))
                     }
                     None => arrival,
@@ -177,7 +190,7 @@ impl LiveImuTimer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use fires_protocol::{Buttons, SensorPacket, StatusPacket};
+    use fires_protocol::{Buttons, SensorPacket, StatusPacket, StatusReason};
 
     fn packet(k: u64) -> [u8; 22] {
         SensorPacket {
@@ -219,6 +232,67 @@ mod tests {
             assert!(l.abs_diff(o.t_ns) <= 1_000, "{l} vs {}", o.t_ns);
         }
         assert!(live[0] - offline.samples[0].t_ns <= 3_000_000);
+    }
+
+    #[test]
+    fn a_change_naming_a_lost_sample_or_told_by_a_repeat_lands_on_its_sample() {
+        // Counters wrap at 256: packet 300 (counter 44) is lost and the pen-up status right after
+        // packet 299 names it; the pen-down was told only by its first repeat, 3 samples late.
+        let mut timer = LiveImuTimer::new(230_400, 100, ImuScale::default());
+        let mut out = Vec::new();
+        let status = |k: u64, seq: u8, pressed: bool, reason| {
+            StatusPacket {
+                sensor_counter: k as u8,
+                sequence: seq,
+                buttons: Buttons(u8::from(pressed)),
+                reason,
+                ..Default::default()
+            }
+            .encode()
+        };
+        for k in 0..320u64 {
+            let mut bytes = if k == 300 {
+                Vec::new()
+            } else {
+                packet(k).to_vec()
+            };
+            if k == 253 {
+                bytes.extend(status(k, 1, true, StatusReason::ButtonRepeat(0)));
+            }
+            if k == 300 {
+                bytes.extend(status(k, 2, false, StatusReason::ButtonChange));
+            }
+            timer.feed(
+                &LinkChunk {
+                    host_time_ns: k * 10_000_000 + 5_000_000,
+                    bytes,
+                },
+                &mut out,
+            );
+        }
+        let samples: Vec<u64> = out
+            .iter()
+            .filter_map(|e| match e {
+                TimedLinkEvent::Imu(s) => Some(s.t_ns),
+                TimedLinkEvent::Button(_) => None,
+            })
+            .collect();
+        let changes: Vec<(u8, u64)> = out
+            .iter()
+            .filter_map(|e| match e {
+                TimedLinkEvent::Button(b) => Some((b.buttons, b.t_ns)),
+                TimedLinkEvent::Imu(_) => None,
+            })
+            .collect();
+        assert_eq!(changes.len(), 2, "{changes:?}");
+        // The live grid still settles (its anchor moves by less than half a period here).
+        let near = |t: u64, s: u64| t.abs_diff(s) < 5_000_000;
+        assert_eq!(changes[0].0, 1);
+        assert!(near(changes[0].1, samples[250]), "{changes:?}");
+        // Sample 300 was lost: the change is at the latest sample, 299 (live times never run ahead of
+        // the samples), not 2.55 s before it.
+        assert_eq!(changes[1].0, 0);
+        assert!(near(changes[1].1, samples[299]), "{changes:?}");
     }
 
     #[test]

@@ -98,6 +98,7 @@ fn reason_name(r: fires_protocol::StatusReason) -> String {
     match r {
         R::Periodic => "periodic".into(),
         R::ButtonChange => "button_change".into(),
+        R::ButtonRepeat(n) => format!("button_repeat_{n}"),
         R::Requested => "requested".into(),
         R::Boot => "boot".into(),
         R::Unknown(b) => format!("unknown_{b}"),

@@ -12,7 +12,7 @@ use fires_protocol::{Frame, StreamDecoder, FRAME_LEN};
 use fires_record::LinkChunk;
 
 pub use crate::link::imu_timing::ButtonChange;
-use crate::link::imu_timing::{prev_counter_gap, unwrap_counter};
+use crate::link::imu_timing::{change_age_samples, prev_counter_gap, unwrap_counter};
 use crate::track::fusion::{ImuSample, ImuScale};
 
 /// Everything the link carried, timed on the host clock.
@@ -112,7 +112,10 @@ pub fn imu_stream(
     for (prev, s) in statuses {
         // The status follows the sensor packet it names; place the change at that sample.
         let k = match prev {
-            Some((k, _)) => k - i64::from(prev_counter_gap(prev, s.sensor_counter)),
+            Some((k, _)) => {
+                k - i64::from(prev_counter_gap(prev, s.sensor_counter))
+                    - change_age_samples(s.reason, period_ns)
+            }
             None => -1,
         };
         let t_ns = if anchor.is_finite() { time_of(k) } else { 0 };
