@@ -259,11 +259,13 @@ fn backward<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
             let col = &s.values[jj * rows..(jj + 1) * rows];
             let (block, below) = col.split_at(s.width);
             let mut acc = w[s.start + jj];
-            for (t, &l) in tmp.iter().zip(below) {
-                sub_scaled(&mut acc, l, t);
+            let d = dot4(&tmp, below);
+            for c in 0..K {
+                acc[c] -= d[c];
             }
-            for (ii, &l) in block.iter().enumerate().skip(jj + 1) {
-                sub_scaled(&mut acc, l, &w[s.start + ii]);
+            let d = dot4(&w[s.start + jj + 1..s.start + s.width], &block[jj + 1..]);
+            for c in 0..K {
+                acc[c] -= d[c];
             }
             for v in &mut acc {
                 *v /= block[jj];
@@ -271,6 +273,35 @@ fn backward<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
             w[s.start + jj] = acc;
         }
     }
+}
+
+/// `Σ lᵢ tᵢ` with four independent partial sums: a single running sum is one dependent
+/// multiply-add chain, bounded by its latency rather than by reading the factor (measured 8% of
+/// the solve on a 100k-vertex LSE system).
+#[inline(always)]
+fn dot4<const K: usize>(t: &[[f64; K]], l: &[f64]) -> [f64; K] {
+    let mut part = [[0.0; K]; 4];
+    let (tc, tr) = t.split_at(t.len() - t.len() % 4);
+    let (lc, lr) = l.split_at(tc.len().min(l.len()));
+    for (t4, l4) in tc.chunks_exact(4).zip(lc.chunks_exact(4)) {
+        for q in 0..4 {
+            for c in 0..K {
+                part[q][c] += l4[q] * t4[q][c];
+            }
+        }
+    }
+    let mut out = [0.0; K];
+    for (ti, &li) in tr.iter().zip(lr) {
+        for c in 0..K {
+            out[c] += li * ti[c];
+        }
+    }
+    for p in part {
+        for c in 0..K {
+            out[c] += p[c];
+        }
+    }
+    out
 }
 
 /// Supernodes at least this wide go through faer's dense TRSM/GEMM kernels.
