@@ -11,8 +11,11 @@
 //!
 //! On a mesh's operators the separators are level curves of the graph distance, of length
 //! `O(√n)`, so the factor holds `O(n log n)` entries where a pure minimum-degree ordering of
-//! a large surface grows faster; measured on the LSE system of a 100k-vertex ROI it halves
-//! the factor and with it the time of a solve, which is bounded by reading the factor.
+//! a large surface grows faster. Measured on Laplacian surface editing's 2-ring, 3×3-block
+//! system it holds 0.76× AMD's entries at 30k vertices and 0.78× at 100k (162M instead of
+//! 207M), and a solve, bounded by reading the factor, shrinks with it. It is within 8% of
+//! METIS's `NodeND` there; on square grids, whose level sets run diagonally, AMD is 10%
+//! smaller, which is why `FillOrdering::Auto` keeps the smaller of the two.
 
 use std::collections::HashMap;
 
