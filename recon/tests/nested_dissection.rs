@@ -7,21 +7,12 @@ use fires_recon::generate::{icosphere, plane_grid};
 use fires_recon::solve::*;
 use fires_recon::SurfaceMesh;
 
-/// SplitMix64, for seeded random patterns.
-struct Rng(u64);
+mod common;
 
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
+use common::disc::Rng;
 
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
+fn below(rng: &mut Rng, n: usize) -> usize {
+    (rng.next_u64() % n as u64) as usize
 }
 
 fn is_permutation(p: &[usize], n: usize) -> bool {
@@ -87,16 +78,16 @@ fn mesh_system(m: &SurfaceMesh, rings: usize, block: usize, shift: f64) -> Spars
 fn nested_dissection_is_a_permutation_of_any_pattern() {
     let mut rng = Rng(7);
     for case in 0..60 {
-        let n = 1 + rng.below(400);
+        let n = 1 + below(&mut rng, 400);
         let mut t: Vec<(usize, usize, f64)> = (0..n).map(|i| (i, i, 1.0)).collect();
         // Sparse random edges, some isolated nodes, repeated entries, and a few dense rows.
-        let edges = rng.below(4 * n + 1);
+        let edges = below(&mut rng, 4 * n + 1);
         for _ in 0..edges {
-            let (i, j) = (rng.below(n), rng.below(n));
+            let (i, j) = (below(&mut rng, n), below(&mut rng, n));
             t.push((i.max(j), i.min(j), 0.5));
         }
         if case % 7 == 0 {
-            let hub = rng.below(n);
+            let hub = below(&mut rng, n);
             for j in 0..n {
                 t.push((hub.max(j), hub.min(j), 0.25));
             }
@@ -166,7 +157,7 @@ fn nested_dissection_factor_is_smaller_than_amd_on_sphere_systems_and_auto_keeps
 
 fn rhs(n: usize, c: usize, seed: u64) -> Mat<f64> {
     let mut rng = Rng(seed);
-    Mat::from_fn(n, c, |_, _| (rng.below(2001) as f64 - 1000.0) / 100.0)
+    Mat::from_fn(n, c, |_, _| (below(&mut rng, 2001) as f64 - 1000.0) / 100.0)
 }
 
 fn max_rel_diff(a: &Mat<f64>, b: &Mat<f64>) -> f64 {

@@ -2,8 +2,9 @@
 //! drawn point, and the loop through a boundary edge traced in the *closing* direction (the direction a
 //! new face on the open side traverses it, opposite to the one face already there).
 
+use super::crossings::nearest_point_on;
 use super::{End, ToolError};
-use crate::network::geom::{bbox, boxes_overlap, lerp, segment_segment, P3};
+use crate::network::geom::P3;
 use crate::network::mesh::{EdgeUse, Network};
 use crate::network::{EdgeId, VertexId};
 
@@ -24,30 +25,13 @@ pub(crate) fn is_border(net: &Network, e: EdgeId) -> bool {
 
 /// The boundary point nearest to `p` within `radius` metres.
 pub(crate) fn nearest_border(net: &Network, p: P3, radius: f64) -> Option<BorderPoint> {
-    let pbox = (p, p);
-    let mut best: Option<BorderPoint> = None;
-    for (e, poly, boxes) in net.edges_near(pbox, radius) {
-        if !is_border(net, e) {
-            continue;
-        }
-        for j in boxes.segments_near(pbox, radius, poly.points.len()) {
-            let (q0, q1) = (poly.points[j], poly.points[j + 1]);
-            if !boxes_overlap(pbox, bbox(&[q0, q1]), radius) {
-                continue;
-            }
-            let (_, t, d) = segment_segment(p, p, q0, q1);
-            if d <= radius && best.is_none_or(|b| d < b.distance) {
-                best = Some(BorderPoint {
-                    edge: e,
-                    seg: j,
-                    t,
-                    point: lerp(q0, q1, t),
-                    distance: d,
-                });
-            }
-        }
-    }
-    best
+    nearest_point_on(net, p, radius, |e| is_border(net, e)).map(|h| BorderPoint {
+        edge: h.edge,
+        seg: h.seg,
+        t: h.t,
+        point: h.point,
+        distance: h.distance,
+    })
 }
 
 /// The boundary point nearest to the `end` of a drawn curve, or the typed refusal.

@@ -42,15 +42,7 @@ pub fn insert_boundary(
     curve: CurveInput<'_>,
     options: &BoundaryOptions,
 ) -> Result<(BoundaryReport, Transaction), ToolError> {
-    let mut pts: Vec<[f64; 3]> = Vec::with_capacity(curve.points.len());
-    for p in curve.points {
-        if !p.iter().all(|c| c.is_finite()) {
-            return Err(ToolError::BadCurve("a point is not finite".into()));
-        }
-        if pts.last().is_none_or(|q| dist(*q, *p) > SAME_POINT_M) {
-            pts.push(*p);
-        }
-    }
+    let mut pts = super::distinct_points(curve.points)?;
     if pts.len() < 3 {
         return Err(ToolError::BadCurve(
             "a boundary needs at least 3 distinct points".into(),

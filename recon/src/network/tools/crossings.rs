@@ -194,9 +194,22 @@ pub(crate) fn find_hits(
 
 /// The network point nearest to `p` within `radius` metres: `(edge, seg, t, point, distance)`.
 pub(crate) fn nearest_point(net: &Network, p: P3, radius: f64) -> Option<Hit> {
+    nearest_point_on(net, p, radius, |_| true)
+}
+
+/// [`nearest_point`] among the edges `accept` takes.
+pub(crate) fn nearest_point_on(
+    net: &Network,
+    p: P3,
+    radius: f64,
+    accept: impl Fn(EdgeId) -> bool,
+) -> Option<Hit> {
     let pbox = (p, p);
     let mut best: Option<Hit> = None;
     for (e, poly, boxes) in net.edges_near(pbox, radius) {
+        if !accept(e) {
+            continue;
+        }
         for j in boxes.segments_near(pbox, radius, poly.points.len()) {
             let (q0, q1) = (poly.points[j], poly.points[j + 1]);
             if !boxes_overlap(pbox, bbox(&[q0, q1]), radius) {

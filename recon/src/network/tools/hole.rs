@@ -152,15 +152,7 @@ pub fn create_hole(
     curve: CurveInput<'_>,
     options: &HoleOptions,
 ) -> Result<(HoleReport, Transaction), ToolError> {
-    let mut pts: Vec<P3> = Vec::with_capacity(curve.points.len());
-    for p in curve.points {
-        if !p.iter().all(|c| c.is_finite()) {
-            return Err(ToolError::BadCurve("a point is not finite".into()));
-        }
-        if pts.last().is_none_or(|q| gap(*q, *p) > SAME_POINT_M) {
-            pts.push(*p);
-        }
-    }
+    let mut pts = super::distinct_points(curve.points)?;
     if pts.len() < 3 {
         return Err(ToolError::BadCurve(
             "a hole needs at least 3 distinct points".into(),

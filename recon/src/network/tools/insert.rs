@@ -130,15 +130,7 @@ pub fn insert_curve(
     curve: CurveInput<'_>,
     options: &InsertOptions,
 ) -> Result<(InsertReport, Transaction), ToolError> {
-    let mut pts: Vec<P3> = Vec::with_capacity(curve.points.len());
-    for p in curve.points {
-        if !p.iter().all(|c| c.is_finite()) {
-            return Err(ToolError::BadCurve("a point is not finite".into()));
-        }
-        if pts.last().is_none_or(|q| gap(*q, *p) > SAME_POINT_M) {
-            pts.push(*p);
-        }
-    }
+    let mut pts = super::distinct_points(curve.points)?;
     if pts.len() < 2 {
         return Err(ToolError::BadCurve(
             "a curve needs at least 2 distinct points".into(),

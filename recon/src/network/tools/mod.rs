@@ -35,6 +35,9 @@ pub use skin::{skin_profiles, SkinOptions, SkinReport};
 pub use skinning::{half_direction, pair_halves};
 pub use tube::{glue_tube, TubeHalves, TubeOptions, TubeReport};
 
+use crate::network::geom::{dist, P3};
+use crate::network::ops::SAME_POINT_M;
+
 /// A curve as a tool reads it: a drawn stroke or a generated curve.
 #[derive(Clone, Copy, Debug)]
 pub struct CurveInput<'a> {
@@ -55,6 +58,21 @@ impl<'a> CurveInput<'a> {
             sigma_mm: None,
         }
     }
+}
+
+/// The points of a drawn curve with exact repeats (within [`SAME_POINT_M`]) dropped, or a
+/// refusal when one is not finite; every tool that reads a curve's points starts here.
+pub(crate) fn distinct_points(points: &[P3]) -> Result<Vec<P3>, ToolError> {
+    let mut pts: Vec<P3> = Vec::with_capacity(points.len());
+    for p in points {
+        if !p.iter().all(|c| c.is_finite()) {
+            return Err(ToolError::BadCurve("a point is not finite".into()));
+        }
+        if pts.last().is_none_or(|q| dist(*q, *p) > SAME_POINT_M) {
+            pts.push(*p);
+        }
+    }
+    Ok(pts)
 }
 
 /// A threshold in millimetres widened to `factor · σ` when the curve's uncertainty is larger, in metres.

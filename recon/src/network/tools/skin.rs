@@ -85,19 +85,6 @@ struct Crossing {
     point: P3,
 }
 
-fn clean(c: &CurveInput<'_>) -> Result<Vec<P3>, ToolError> {
-    let mut pts: Vec<P3> = Vec::with_capacity(c.points.len());
-    for p in c.points {
-        if !p.iter().all(|x| x.is_finite()) {
-            return Err(ToolError::BadCurve("a point is not finite".into()));
-        }
-        if pts.last().is_none_or(|q| dist(*q, *p) > SAME_POINT_M) {
-            pts.push(*p);
-        }
-    }
-    Ok(pts)
-}
-
 /// The closest approach of `spine` to the closed polyline `profile` (last point = first), looking only at
 /// spine segments whose box comes within `margin` of the profile's box (all of them when that finds none
 /// closer than `margin`, so a refusal reports the true distance).
@@ -190,7 +177,7 @@ pub fn skin_profiles(
     let apart = widened_m(options.vertex_snap_mm, sigma, options.sigma_factor);
     let mut loops: Vec<Vec<P3>> = Vec::with_capacity(profiles.len());
     for c in profiles {
-        let mut pts = clean(c)?;
+        let mut pts = super::distinct_points(c.points)?;
         if pts.len() < 3 {
             return Err(ToolError::BadCurve(
                 "a profile needs at least 3 distinct points".into(),
@@ -215,7 +202,7 @@ pub fn skin_profiles(
     let mut spine_pts: Vec<Vec<P3>> = Vec::with_capacity(2);
     let mut cross: Vec<Vec<Crossing>> = Vec::with_capacity(2);
     for (s, c) in spines.iter().enumerate() {
-        let mut pts = clean(c)?;
+        let mut pts = super::distinct_points(c.points)?;
         if pts.len() < 2 {
             return Err(ToolError::BadCurve(
                 "a spine needs at least 2 distinct points".into(),
