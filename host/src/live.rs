@@ -140,11 +140,7 @@ enum Msg {
 /// The recording metadata of a live session.
 pub fn live_meta(rig: RigCalibration, nominal_rate_hz: f64) -> Meta {
     let cameras = (0..2u8)
-        .map(|id| CameraStream {
-            id,
-            provides: FrameContent::Images,
-            nominal_rate_hz,
-        })
+        .map(|id| CameraStream::global(id, FrameContent::Images, nominal_rate_hz))
         .collect();
     Meta::new(
         Source {

@@ -46,6 +46,16 @@ pub fn stereo_rig(meta: &Meta) -> Result<StereoRig, MetaError> {
     Ok(StereoRig::new(left.intrinsics, right.intrinsics, r, t))
 }
 
+/// The rolling-shutter delay of one pixel row of each camera (left, right), nanoseconds: the stream's
+/// `readout_s` over its calibrated height (0 for a global shutter or a camera the metadata does not describe).
+pub fn row_times_ns(meta: &Meta) -> [f64; 2] {
+    std::array::from_fn(|i| {
+        let stream = meta.cameras.iter().find(|c| usize::from(c.id) == i);
+        let height = meta.rig.cameras.get(i).map_or(0, |c| c.intrinsics.height);
+        stream.map_or(0.0, |s| s.row_time_s(1.0, height) * 1e9)
+    })
+}
+
 /// World -> left-camera transform of the recording (identity when camera 0 defines the world).
 pub fn world_to_left(meta: &Meta) -> Option<(Matrix3<f64>, Vector3<f64>)> {
     let left = meta.rig.cameras.first()?;

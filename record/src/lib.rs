@@ -3,7 +3,8 @@
 //! A recording is a directory:
 //! - `meta.json`: [`Meta`] (format version, rig calibration, pen geometry, board scale factors, camera streams);
 //! - `link.bin`: the raw pen -> host bytes as received, records `[u64 LE host_time_ns][u32 LE len][len bytes]`;
-//! - `cam{N}/frames.jsonl`: one [`CameraFrame`] per line; images (if any) as `cam{N}/{index:06}.pgm`;
+//! - `cam{N}/frames.jsonl`: one [`CameraFrame`] per line; images (if any) as `cam{N}/{index:06}.pgm`,
+//!   or Zstandard-compressed as `cam{N}/{index:06}.pgm.zst`;
 //! - `truth/` (simulated recordings only): `imu.jsonl`, `exposures.jsonl`, `packets.jsonl`, `strokes.json`,
 //!   `world.json`.
 //!
@@ -93,6 +94,11 @@ pub struct CameraFrame {
 /// File name of frame `index`'s image.
 pub fn image_file_name(index: u64) -> String {
     format!("{index:06}.pgm")
+}
+
+/// File name of frame `index`'s image stored compressed (a PGM inside a Zstandard frame; `zstd -d` restores it).
+pub fn compressed_image_file_name(index: u64) -> String {
+    format!("{index:06}.pgm{}", image::ZSTD_SUFFIX)
 }
 
 /// Directory name of camera `id`.

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 /// Name written in `meta.json`'s `format` field.
 pub const FORMAT_NAME: &str = "fires-recording";
 /// Format version this crate writes (`MAJOR.MINOR`); readers accept any minor of the same major.
-pub const FORMAT_VERSION: &str = "1.0";
+pub const FORMAT_VERSION: &str = "1.1";
 /// Major version this crate reads.
 pub const FORMAT_MAJOR: u32 = 1;
 
@@ -261,6 +261,36 @@ pub struct CameraStream {
     pub provides: FrameContent,
     /// Nominal frame rate, hertz.
     pub nominal_rate_hz: f64,
+    /// Exposure time of one row, seconds (0: unknown or negligible). A frame's `exposure_time_ns` is the middle
+    /// of its first row's exposure, so a moving spot is smeared symmetrically about that time's position.
+    #[serde(default)]
+    pub exposure_s: f64,
+    /// Rolling-shutter readout, seconds: row `y` (of `height`) is exposed `readout_s * y / height` after the first
+    /// row (0: a global shutter, every row at the frame time). Format 1.1; absent in 1.0 files.
+    #[serde(default)]
+    pub readout_s: f64,
+}
+
+impl CameraStream {
+    /// A global-shutter stream with negligible exposure (the format 1.0 meaning).
+    pub fn global(id: u8, provides: FrameContent, nominal_rate_hz: f64) -> Self {
+        CameraStream {
+            id,
+            provides,
+            nominal_rate_hz,
+            exposure_s: 0.0,
+            readout_s: 0.0,
+        }
+    }
+
+    /// Time after the frame time at which row `y` (pixels, of `height` rows) was exposed, seconds.
+    pub fn row_time_s(&self, y: f64, height: u32) -> f64 {
+        if self.readout_s == 0.0 || height == 0 {
+            0.0
+        } else {
+            self.readout_s * y / f64::from(height)
+        }
+    }
 }
 
 /// Where a recording came from.

@@ -36,6 +36,9 @@ pub enum FrameImage {
     Lost,
 }
 
+/// Most pixels a compressed frame may hold when its camera has no calibration (a 16-megapixel sensor).
+const MAX_IMAGE_PIXELS: usize = 1 << 24;
+
 fn read_file(path: &Path) -> Result<Vec<u8>, RecordError> {
     fs::read(path).map_err(|e| RecordError::io(path, e))
 }
@@ -313,8 +316,12 @@ impl RecordingReader {
             });
         }
         let path = self.dir.join(camera_dir_name(frame.camera)).join(name);
-        let img = GrayImage::from_pgm(&read_file(&path)?, &path)?;
-        if let Some(cam) = self.meta.rig.cameras.get(frame.camera as usize) {
+        let calibrated = self.meta.rig.cameras.get(frame.camera as usize);
+        let max_pixels = calibrated.map_or(MAX_IMAGE_PIXELS, |c| {
+            c.intrinsics.width as usize * c.intrinsics.height as usize
+        });
+        let img = GrayImage::from_stored(&read_file(&path)?, &path, max_pixels)?;
+        if let Some(cam) = calibrated {
             if (img.width, img.height) != (cam.intrinsics.width, cam.intrinsics.height) {
                 return Err(RecordError::BadImage {
                     path,

@@ -10,7 +10,9 @@ use crate::error::RecordError;
 use crate::image::GrayImage;
 use crate::meta::Meta;
 use crate::truth::{ExposureTruth, ImuTruth, PacketTruth, StrokeTruth, WorldTruth};
-use crate::{camera_dir_name, image_file_name, CameraFrame, LinkChunk};
+use crate::{
+    camera_dir_name, compressed_image_file_name, image_file_name, CameraFrame, LinkChunk,
+};
 use serde::Serialize;
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
@@ -25,6 +27,8 @@ pub struct WriterOptions {
     /// Force written data to disk when this much time has passed since the last time (survives a power cut up
     /// to about this long before it); `None`: only [`RecordingWriter::finish`] does.
     pub sync_interval: Option<Duration>,
+    /// Store frame images Zstandard-compressed (`{index:06}.pgm.zst`) rather than as plain PGM.
+    pub compress_images: bool,
 }
 
 impl Default for WriterOptions {
@@ -33,6 +37,7 @@ impl Default for WriterOptions {
         WriterOptions {
             flush_each_record: true,
             sync_interval: Some(Duration::from_secs(1)),
+            compress_images: false,
         }
     }
 }
@@ -44,6 +49,7 @@ impl WriterOptions {
         WriterOptions {
             flush_each_record: false,
             sync_interval: None,
+            compress_images: false,
         }
     }
 }
@@ -273,7 +279,8 @@ impl RecordingWriter {
         self.end_record(Stream::Link)
     }
 
-    /// Appends one frame; if `image` is given it is written as `cam{N}/{index:06}.pgm` and `frame.image` is set
+    /// Appends one frame; if `image` is given it is written as `cam{N}/{index:06}.pgm` (`.pgm.zst` when
+    /// [`WriterOptions::compress_images`]) and `frame.image` is set
     /// to that name.
     pub fn write_frame(
         &mut self,
@@ -288,12 +295,18 @@ impl RecordingWriter {
             .ok_or(RecordError::UnknownCamera { camera: cam })?;
         match image {
             Some(img) => {
-                let name = image_file_name(frame.index);
+                let (name, bytes) = if self.options.compress_images {
+                    let name = compressed_image_file_name(frame.index);
+                    let bytes = img.to_pgm_zst().map_err(|e| RecordError::io(&name, e))?;
+                    (name, bytes)
+                } else {
+                    (image_file_name(frame.index), img.to_pgm())
+                };
                 let cdir = self.dir.join(camera_dir_name(cam));
                 let path = cdir.join(&name);
                 // The image is whole on the file system before the line naming it is written.
                 let mut file = File::create(&path).map_err(|e| RecordError::io(&path, e))?;
-                file.write_all(&img.to_pgm())
+                file.write_all(&bytes)
                     .map_err(|e| RecordError::io(&path, e))?;
                 let mut f = frame.clone();
                 f.image = Some(name);

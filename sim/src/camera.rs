@@ -1,7 +1,9 @@
 //! Cameras: pinhole projection with OpenCV distortion (through [`fires_record::CameraModel`], the same code the
-//! host uses), per-frame exposure times with jitter, LED visibility (field of view, emission cone, occlusion by
-//! the object and by the hand), spurious spots (LED reflections on the object, sunlight), and the device output:
-//! a blob list (Wii-like cameras) or an 8-bit image with blurred spots, background and sensor noise.
+//! host uses), per-frame exposure times with jitter, the sensor's timing (a free-running clock whose rate is off
+//! nominal, a rolling shutter that exposes each row at its own time, and an exposure that smears a moving spot
+//! along its path), LED visibility (field of view, emission cone, occlusion by the object and by the hand),
+//! spurious spots (LED reflections on the object, sunlight), and the device output: a blob list (Wii-like
+//! cameras) or an 8-bit image with blurred spots, background and sensor noise.
 //!
 //! Rendering cost is kept low: the background is copied from a pre-generated noise table at a random offset
 //! (one `memcpy` per frame), and each spot is evaluated only in a window of about 3.5 sigma around it.
@@ -61,6 +63,27 @@ impl CameraOutput {
     }
 }
 
+/// When a sensor's pixels are exposed (docs/simulator.md, "Camera timing").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SensorTiming {
+    /// Exposure time of each row, seconds: a moving spot is smeared along its image path over this time.
+    pub exposure_s: f64,
+    /// Rolling-shutter readout, seconds: row `y` of `height` is exposed `readout_s * y / height` after row 0
+    /// (0: a global shutter).
+    pub readout_s: f64,
+    /// Relative error of the free-running frame clock: frames come at `rate_hz * (1 + rate_error)`.
+    pub rate_error: f64,
+}
+
+impl SensorTiming {
+    /// A global shutter with an instantaneous exposure and an exact clock (the Wii camera's model).
+    pub const IDEAL: SensorTiming = SensorTiming {
+        exposure_s: 0.0,
+        readout_s: 0.0,
+        rate_error: 0.0,
+    };
+}
+
 /// One simulated camera.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CameraConfig {
@@ -74,6 +97,8 @@ pub struct CameraConfig {
     pub jitter_s: f64,
     /// Noise of the reported timestamp around the true exposure time, seconds.
     pub timestamp_noise_s: f64,
+    /// Exposure, rolling shutter and clock rate.
+    pub timing: SensorTiming,
     /// Device output.
     pub output: CameraOutput,
     /// Brightness (relative, 1 = on-axis at 1 m) below which an LED is not seen.
@@ -87,12 +112,27 @@ pub struct CameraConfig {
 /// A bright spot to render or report.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Spot {
-    /// Pixel position.
+    /// Pixel position (at the middle of the exposure).
     pub px: [f64; 2],
-    /// Peak level before saturation, DN.
+    /// Peak level before saturation of the spot at rest, DN.
     pub peak: f64,
     /// Gaussian sigma, pixels.
     pub sigma: f64,
+    /// How far the spot moves during the exposure, pixels: it is smeared evenly from `px - streak / 2` to
+    /// `px + streak / 2` (zero for a still spot or an instantaneous exposure).
+    pub streak: [f64; 2],
+}
+
+impl Spot {
+    /// A still spot.
+    pub fn still(px: [f64; 2], peak: f64, sigma: f64) -> Self {
+        Spot {
+            px,
+            peak,
+            sigma,
+            streak: [0.0; 2],
+        }
+    }
 }
 
 /// What one exposure sees.
@@ -115,37 +155,100 @@ impl CameraConfig {
         (m.blur_px * m.blur_px + r * r).sqrt()
     }
 
-    /// Computes LED visibility and spots for one exposure.
+    /// The frame time at which frame `index` is exposed nominally (row 0), with the clock's rate error.
+    pub fn nominal_frame_time(&self, index: u64) -> f64 {
+        self.offset_s + index as f64 / (self.rate_hz * (1.0 + self.timing.rate_error))
+    }
+
+    /// Time after the frame time at which pixel row `y` is exposed (rolling shutter), seconds.
+    pub fn row_delay(&self, y: f64) -> f64 {
+        let h = f64::from(self.cal.intrinsics.height);
+        self.timing.readout_s * y.clamp(0.0, h) / h
+    }
+
+    /// When LED `led` is exposed in the frame of time `t` (row 0) and where the pen is then: with a rolling
+    /// shutter, the time of the row the LED images in, found by fixed-point iteration (the row moves far less
+    /// than a row per readout step at drawing speeds, so three steps settle it to well under a microsecond).
+    fn led_exposure(
+        &self,
+        t: f64,
+        led: usize,
+        pen: &Pen,
+        pose_at: &dyn Fn(f64) -> Pose,
+        frame_pose: &Pose,
+    ) -> (f64, Pose) {
+        if self.timing.readout_s == 0.0 {
+            return (t, *frame_pose);
+        }
+        let mut s = t;
+        let mut pose = *frame_pose;
+        for _ in 0..3 {
+            let p = pen.leds_world(&pose.tip, &pose.q)[led];
+            let Some(px) = self.cal.project_world([p.x, p.y, p.z]) else {
+                break;
+            };
+            let next = t + self.row_delay(px[1]);
+            if (next - s).abs() < 1e-9 {
+                break;
+            }
+            s = next;
+            pose = pose_at(s);
+        }
+        (s, pose)
+    }
+
+    /// How far LED `led`'s image moves over the exposure centred on `s`, pixels.
+    fn streak(&self, s: f64, led: usize, pen: &Pen, pose_at: &dyn Fn(f64) -> Pose) -> [f64; 2] {
+        let half = 0.5 * self.timing.exposure_s;
+        if half == 0.0 {
+            return [0.0; 2];
+        }
+        let image = |t: f64| {
+            let pose = pose_at(t);
+            let p = pen.leds_world(&pose.tip, &pose.q)[led];
+            self.cal.project_world([p.x, p.y, p.z])
+        };
+        match (image(s - half), image(s + half)) {
+            (Some(a), Some(b)) => [b[0] - a[0], b[1] - a[1]],
+            _ => [0.0; 2],
+        }
+    }
+
+    /// Computes LED visibility and spots for the frame exposed at `t` (its first row), the pen moving as
+    /// `pose_at` says: each LED is seen at its own row's time and smeared over the exposure.
     pub fn observe(
         &self,
-        pose: &Pose,
+        t: f64,
+        pose_at: &dyn Fn(f64) -> Pose,
         pen: &Pen,
         scene: Option<&Scene>,
         hand: Option<&HandModel>,
         rng: &mut SimRng,
     ) -> Observation {
         let centre = V3::from(self.cal.extrinsics.centre_world());
-        let leds = pen.leds_world(&pose.tip, &pose.q);
-        let hand_world = hand.map(|h| (pose.tip + pose.q * h.centre_pen, h.radius));
+        let frame_pose = pose_at(t);
         let gain = self.output.image_model().gain;
         let mut out = Observation {
-            leds: Vec::with_capacity(leds.len()),
+            leds: Vec::with_capacity(pen.geometry.led_positions_m.len()),
             led_spots: Vec::new(),
             spurious: Vec::new(),
         };
-        for (i, led) in leds.iter().enumerate() {
+        for i in 0..pen.geometry.led_positions_m.len() {
+            let (s, pose) = self.led_exposure(t, i, pen, pose_at, &frame_pose);
+            let led = pen.leds_world(&pose.tip, &pose.q)[i];
+            let hand_world = hand.map(|h| (pose.tip + pose.q * h.centre_pen, h.radius));
             let pixel = self.cal.project_world([led.x, led.y, led.z]);
             let d = (centre - led).norm();
-            let brightness = pen.intensity_towards(led, &pose.q, &centre) / (d * d).max(1e-6);
+            let brightness = pen.intensity_towards(&led, &pose.q, &centre) / (d * d).max(1e-6);
             let visibility = if pen.disabled.get(i).copied().unwrap_or(false) {
                 Visibility::Disabled
             } else if pixel.is_none() {
                 Visibility::BehindCamera
             } else if !pixel.is_some_and(|p| self.cal.intrinsics.contains(p)) {
                 Visibility::OutOfView
-            } else if scene.is_some_and(|s| s.shape.blocks_segment(led, &centre, 1e-4)) {
+            } else if scene.is_some_and(|s| s.shape.blocks_segment(&led, &centre, 1e-4)) {
                 Visibility::OccludedByObject
-            } else if hand_world.is_some_and(|(c, r)| segment_hits_sphere(led, &centre, &c, r)) {
+            } else if hand_world.is_some_and(|(c, r)| segment_hits_sphere(&led, &centre, &c, r)) {
                 Visibility::OccludedByHand
             } else if brightness < self.min_brightness {
                 Visibility::TooDim
@@ -157,10 +260,11 @@ impl CameraConfig {
                     px,
                     peak: gain * brightness,
                     sigma: self.spot_sigma(d),
+                    streak: self.streak(s, i, pen, pose_at),
                 });
-                if let Some(s) = scene {
+                if let Some(sc) = scene {
                     if rng.chance(self.reflection_rate) {
-                        if let Some(spot) = self.reflection(s, &pose.tip, led, gain * brightness) {
+                        if let Some(spot) = self.reflection(sc, &pose.tip, &led, gain * brightness) {
                             out.spurious.push(spot);
                         }
                     }
@@ -176,11 +280,11 @@ impl CameraConfig {
         for _ in 0..n_sun {
             let w = f64::from(self.cal.intrinsics.width);
             let h = f64::from(self.cal.intrinsics.height);
-            out.spurious.push(Spot {
-                px: [rng.range(0.0, w - 1.0), rng.range(0.0, h - 1.0)],
-                peak: rng.range(0.3, 1.5) * 255.0,
-                sigma: rng.range(0.8, 3.0),
-            });
+            out.spurious.push(Spot::still(
+                [rng.range(0.0, w - 1.0), rng.range(0.0, h - 1.0)],
+                rng.range(0.3, 1.5) * 255.0,
+                rng.range(0.8, 3.0),
+            ));
         }
         out
     }
@@ -199,11 +303,11 @@ impl CameraConfig {
             return None;
         }
         let centre = V3::from(self.cal.extrinsics.centre_world());
-        Some(Spot {
+        Some(Spot::still(
             px,
-            peak: 0.3 * peak,
-            sigma: self.spot_sigma((centre - mirror).norm()),
-        })
+            0.3 * peak,
+            self.spot_sigma((centre - mirror).norm()),
+        ))
     }
 
     /// The device's blob list for an observation.
@@ -310,20 +414,40 @@ impl NoiseTable {
     }
 }
 
-/// Adds a Gaussian spot to an image within a 3.5-sigma window.
+/// Adds a Gaussian spot to an image within a 3.5-sigma window; a streaked spot is the same energy spread evenly
+/// along its streak (a sum of Gaussians at most half a sigma apart, which is smooth to 0.3% of the peak).
 pub fn draw_spot(img: &mut GrayImage, s: &Spot) {
+    let len = s.streak[0].hypot(s.streak[1]);
+    let n = ((len / (0.5 * s.sigma)).ceil() as usize).clamp(1, 256);
     let r = (3.5 * s.sigma).ceil() + 1.0;
+    let half = [0.5 * s.streak[0].abs(), 0.5 * s.streak[1].abs()];
     let (w, h) = (i64::from(img.width), i64::from(img.height));
-    let x0 = ((s.px[0] - r).floor() as i64).max(0);
-    let x1 = ((s.px[0] + r).ceil() as i64).min(w - 1);
-    let y0 = ((s.px[1] - r).floor() as i64).max(0);
-    let y1 = ((s.px[1] + r).ceil() as i64).min(h - 1);
+    let x0 = ((s.px[0] - half[0] - r).floor() as i64).max(0);
+    let x1 = ((s.px[0] + half[0] + r).ceil() as i64).min(w - 1);
+    let y0 = ((s.px[1] - half[1] - r).floor() as i64).max(0);
+    let y1 = ((s.px[1] + half[1] + r).ceil() as i64).min(h - 1);
     let k = -0.5 / (s.sigma * s.sigma);
+    // Sample centres evenly inside the streak (the midpoint rule), each with 1/n of the energy.
+    let centres: Vec<[f64; 2]> = (0..n)
+        .map(|j| {
+            let f = if n == 1 {
+                0.0
+            } else {
+                (j as f64 + 0.5) / n as f64 - 0.5
+            };
+            [s.px[0] + f * s.streak[0], s.px[1] + f * s.streak[1]]
+        })
+        .collect();
+    let peak = s.peak / n as f64;
     for y in y0..=y1 {
-        let dy = y as f64 - s.px[1];
         for x in x0..=x1 {
-            let dx = x as f64 - s.px[0];
-            let v = s.peak * ((dx * dx + dy * dy) * k).exp();
+            let v: f64 = centres
+                .iter()
+                .map(|c| {
+                    let (dx, dy) = (x as f64 - c[0], y as f64 - c[1]);
+                    peak * ((dx * dx + dy * dy) * k).exp()
+                })
+                .sum();
             let idx = (y * w + x) as usize;
             let cur = f64::from(img.data[idx]);
             img.data[idx] = (cur + v).round().min(255.0) as u8;
@@ -355,11 +479,17 @@ mod tests {
             offset_s: 0.0,
             jitter_s: 0.0,
             timestamp_noise_s: 0.0,
+            timing: SensorTiming::IDEAL,
             output: CameraOutput::Images(image),
             min_brightness: 0.02,
             reflection_rate: 0.0,
             sunlight_rate: 0.0,
         }
+    }
+
+    /// A pen standing still at `p`.
+    fn still(p: Pose) -> impl Fn(f64) -> Pose {
+        move |_| p
     }
 
     /// The pen 1 m in front of the camera, pointing away from it (LEDs facing the camera).
@@ -376,7 +506,7 @@ mod tests {
         let pen = Pen::fires_default();
         let mut rng = SimRng::stream(1, 1);
         let p = pose(V3::new(0.0, 0.0, 1.0));
-        let free = cam.observe(&p, &pen, None, None, &mut rng);
+        let free = cam.observe(0.0, &still(p), &pen, None, None, &mut rng);
         assert!(free
             .leds
             .iter()
@@ -385,7 +515,7 @@ mod tests {
         // A sphere between the pen and the camera hides every LED.
         let shape = ObjectKind::Sphere.build(V3::new(0.0, 0.0, 0.5), 0.05, V3::new(0.0, -1.0, 0.0));
         let scene = Scene::new(shape, V3::z(), V3::new(0.0, -1.0, 0.0), V3::zeros(), 0.02);
-        let hidden = cam.observe(&p, &pen, Some(&scene), None, &mut rng);
+        let hidden = cam.observe(0.0, &still(p), &pen, Some(&scene), None, &mut rng);
         assert!(hidden
             .leds
             .iter()
@@ -400,13 +530,13 @@ mod tests {
             centre_pen: p.q.inverse() * (h_world - p.tip),
             radius: 0.01,
         };
-        let o = cam.observe(&p, &pen, None, Some(&hand), &mut rng);
+        let o = cam.observe(0.0, &still(p), &pen, None, Some(&hand), &mut rng);
         let vis: Vec<_> = o.leds.iter().map(|l| l.visibility).collect();
         assert_eq!(vis[1], Visibility::OccludedByHand);
         assert_eq!(vis[0], Visibility::Visible);
         assert_eq!(vis[2], Visibility::Visible);
         // Brightness falls with the square of the distance.
-        let far = cam.observe(&pose(V3::new(0.0, 0.0, 2.0)), &pen, None, None, &mut rng);
+        let far = cam.observe(0.0, &still(pose(V3::new(0.0, 0.0, 2.0))), &pen, None, None, &mut rng);
         let ratio = free.leds[0].brightness / far.leds[0].brightness;
         let (d1, d2) = (1.0 - 0.02, 2.0 - 0.02);
         assert!((ratio - (d2 * d2) / (d1 * d1)).abs() < 1e-9);
@@ -417,11 +547,7 @@ mod tests {
         let cam = camera();
         let mut rng = SimRng::stream(2, 2);
         let table = NoiseTable::new(640, 480, cam.output.image_model(), &mut rng);
-        let spot = Spot {
-            px: [100.3, 200.7],
-            peak: 150.0,
-            sigma: 1.5,
-        };
+        let spot = Spot::still([100.3, 200.7], 150.0, 1.5);
         let img = table.render(640, 480, &[spot], &mut rng);
         let at = |x: usize, y: usize| img.data[y * 640 + x];
         assert_eq!(

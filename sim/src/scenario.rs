@@ -4,7 +4,7 @@
 //! 47 uT at 60 degrees inclination with a seeded heading, the pen clock drifts by a seeded +-50 ppm, and the
 //! IMU biases, hard and soft iron are seeded.
 
-use crate::camera::{CameraConfig, CameraOutput, HandModel, ImageModel};
+use crate::camera::{CameraConfig, CameraOutput, HandModel, ImageModel, SensorTiming};
 use crate::imu::ImuConfig;
 use crate::link::LinkConfig;
 use crate::motion::trajectory::{DrawStyle, FreeMotion};
@@ -20,7 +20,8 @@ use nalgebra::{Matrix3, Rotation3};
 /// these, error messages and help texts list them from here).
 pub const SCENARIOS: &[(&str, &str)] = &[
     ("fires-v1", "two Wii-remote-like IR blob cameras: 1024x768, 45 deg hFOV, 100 Hz, parallel, 0.25 m baseline; pen draws a curve network on a sphere"),
-    ("fires-v2", "Minoru-like stereo webcam: 640x480 8-bit images, 15 Hz, 6 cm baseline; pen draws a curve network on a freeform blob"),
+    ("webcam", "two PlayStation-Eye-class IR webcams: 640x480 8-bit images, 60 Hz free-running clocks, rolling shutter, 0.20 m baseline toed in to 0.6 m; pen draws a curve network on a freeform blob"),
+    ("fires-v2", "Minoru-like stereo webcam: 640x480 8-bit images, 15 Hz, rolling shutter, 6 cm baseline; pen draws a curve network on a freeform blob"),
     ("bar", "thesis 7.1 experiment 1: an 81.0 mm bar with an LED at each end moved through 0.35-1.5 m in front of the fires-v1 rig"),
     ("tip", "thesis 7.1 experiment 2: the pen with its tip at LED 1, which is never rendered; 0.35-1.5 m in front of the fires-v1 rig"),
     ("stress", "fires-v2 rig with a box: hand occlusion, reflections, sunlight, link faults with a disconnect, fast motion"),
@@ -157,6 +158,7 @@ fn wii_rig(link_jitter: f64) -> Vec<CameraConfig> {
             offset_s: 0.02 + offset,
             jitter_s: 0.0002,
             timestamp_noise_s: link_jitter,
+            timing: SensorTiming::IDEAL,
             output: CameraOutput::Blobs {
                 max_blobs: 4,
                 centroid_noise_px: 0.5,
@@ -169,7 +171,15 @@ fn wii_rig(link_jitter: f64) -> Vec<CameraConfig> {
         .collect()
 }
 
-fn minoru_rig() -> Vec<CameraConfig> {
+/// Clock rate errors of two free-running cameras: the first within +-0.1% of nominal, the second off the first
+/// by a seeded 0.05-0.2% either way (crystal tolerances of consumer webcams).
+fn free_running_rates(rng: &mut SimRng) -> [f64; 2] {
+    let first = rng.range(-1e-3, 1e-3);
+    let apart = rng.range(0.5e-3, 2e-3) * if rng.chance(0.5) { 1.0 } else { -1.0 };
+    [first, first + apart]
+}
+
+fn minoru_rig(rates: [f64; 2]) -> Vec<CameraConfig> {
     let image = ImageModel {
         background: 14.0,
         noise_sigma: 3.0,
@@ -193,6 +203,110 @@ fn minoru_rig() -> Vec<CameraConfig> {
             offset_s: 0.03 + offset,
             jitter_s: 0.002,
             timestamp_noise_s: 0.001,
+            // The Minoru's two VGA CMOS sensors are rolling-shutter parts read out at their 30 Hz frame time
+            // and run at 15 Hz over one USB 2 port; 10 ms is an indoor auto-exposure.
+            timing: SensorTiming {
+                exposure_s: 0.010,
+                readout_s: 0.030,
+                rate_error: rates[i],
+            },
+            output: CameraOutput::Images(image),
+            min_brightness: 0.02,
+            reflection_rate: 0.02,
+            sunlight_rate: 0.01,
+        })
+        .collect()
+}
+
+/// Intrinsics of the PlayStation-Eye-class webcam: 75 degree diagonal field of view (fx = fy = 400 px /
+/// tan 37.5 deg = 521 px), moderate barrel distortion, principal point a few pixels off centre.
+pub fn webcam_camera(extrinsics: Extrinsics, right: bool) -> CalibratedCamera {
+    let mut m = CameraModel::from_hfov(640, 480, 2.0 * (320.0f64 / 521.3).atan());
+    m.cx += if right { 2.1 } else { -1.4 };
+    m.cy += if right { -1.6 } else { 0.9 };
+    m.fy *= 0.9985;
+    m.k1 = -0.09;
+    m.k2 = 0.03;
+    m.p1 = -0.0004;
+    m.p2 = 0.0006;
+    m.k3 = -0.004;
+    CalibratedCamera {
+        intrinsics: m,
+        extrinsics,
+    }
+}
+
+/// Distance from the webcam rig's baseline at which the two optical axes cross, metres.
+const WEBCAM_CONVERGENCE_M: f64 = 0.6;
+/// The webcam rig's baseline, metres.
+const WEBCAM_BASELINE_M: f64 = 0.20;
+
+/// Rotation about the camera y axis by `angle` as a row-major matrix (x_cam = R x).
+fn yaw(angle: f64) -> Rotation3<f64> {
+    Rotation3::from_euler_angles(0.0, angle, 0.0)
+}
+
+/// The webcam rig in its own frame: each camera's rotation (x_cam = R (x - c)) and centre, both toed in so
+/// their optical axes cross `WEBCAM_CONVERGENCE_M` in front of the baseline's midpoint.
+fn webcam_poses() -> [(Rotation3<f64>, V3); 2] {
+    let half = 0.5 * WEBCAM_BASELINE_M;
+    let toe = (half / WEBCAM_CONVERGENCE_M).atan();
+    [
+        (yaw(-toe), V3::new(-half, 0.0, 0.0)),
+        (yaw(toe), V3::new(half, 0.0, 0.0)),
+    ]
+}
+
+/// A point of the webcam rig's frame in the world (left camera) frame.
+fn webcam_rig_to_world(p: V3) -> V3 {
+    let [(r0, c0), _] = webcam_poses();
+    r0 * (p - c0)
+}
+
+fn webcam_rig(rates: [f64; 2], phases: [f64; 2]) -> Vec<CameraConfig> {
+    // IR-pass filter, 4 ms exposure, lowest gain: the frame is dark but for the LEDs. The OV7720-class sensor's
+    // 60 dB dynamic range on its 10-bit ADC puts the dark noise near one 10-bit step, 0.25 DN at 8 bits.
+    let image = ImageModel {
+        background: 2.0,
+        noise_sigma: 0.25,
+        gain: 500.0,
+        led_diameter_m: 0.005,
+        blur_px: 0.8,
+    };
+    let [(r0, c0), (r1, c1)] = webcam_poses();
+    // Camera 1 relative to camera 0 (the world frame): x_1 = R1 R0^T x_0 + R1 (c0 - c1).
+    let rel = r1 * r0.inverse();
+    let t = r1 * (c0 - c1);
+    let m = rel.matrix();
+    let right = Extrinsics {
+        rotation: [
+            [m[(0, 0)], m[(0, 1)], m[(0, 2)]],
+            [m[(1, 0)], m[(1, 1)], m[(1, 2)]],
+            [m[(2, 0)], m[(2, 1)], m[(2, 2)]],
+        ],
+        translation_m: [t.x, t.y, t.z],
+    };
+    (0..2)
+        .map(|i| CameraConfig {
+            cal: webcam_camera(
+                if i == 0 {
+                    Extrinsics::IDENTITY
+                } else {
+                    right
+                },
+                i == 1,
+            ),
+            rate_hz: 60.0,
+            offset_s: 0.03 + phases[i],
+            // A free-running crystal: exposures keep their period; the host stamps frames on USB arrival.
+            jitter_s: 0.000_05,
+            timestamp_noise_s: 0.001,
+            // Rows read out in 15 ms; 4 ms exposure.
+            timing: SensorTiming {
+                exposure_s: 0.004,
+                readout_s: 0.015,
+                rate_error: rates[i],
+            },
             output: CameraOutput::Images(image),
             min_brightness: 0.02,
             reflection_rate: 0.02,
@@ -283,6 +397,9 @@ pub fn scenario(
     let imu = imu_config(&mut rng);
     let pen_clock_drift_ppm = rng.range(-50.0, 50.0);
     let pen_boot_s = rng.range(2.0, 30.0);
+    // Drawn after every earlier value, so those stay what they were for a seed.
+    let rates = free_running_rates(&mut rng);
+    let phases = [rng.range(0.0, 1.0 / 60.0), rng.range(0.0, 1.0 / 60.0)];
     let base = |cameras, pen, hand, motion, link| Scenario {
         name: name.to_string(),
         cameras,
@@ -313,8 +430,20 @@ pub fn scenario(
             },
             mild_link(),
         ),
+        "webcam" => base(
+            webcam_rig(rates, phases),
+            Pen::fires_default(),
+            Some(default_hand()),
+            MotionSpec::Drawing {
+                object: object.unwrap_or(ObjectKind::Blob),
+                centre: webcam_rig_to_world(V3::new(0.0, 0.04, WEBCAM_CONVERGENCE_M)),
+                size: 0.08,
+                style: drawing_style(),
+            },
+            mild_link(),
+        ),
         "fires-v2" => base(
-            minoru_rig(),
+            minoru_rig(rates),
             Pen::fires_default(),
             Some(default_hand()),
             MotionSpec::Drawing {
@@ -350,7 +479,7 @@ pub fn scenario(
             )
         }
         "stress" => {
-            let mut cams = minoru_rig();
+            let mut cams = minoru_rig(rates);
             for c in &mut cams {
                 c.reflection_rate = 0.25;
                 c.sunlight_rate = 0.3;

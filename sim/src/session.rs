@@ -16,7 +16,7 @@ use crate::scenario::{scenario, world_up, MotionSpec, Scenario};
 use crate::SimError;
 use fires_record::{
     CameraFrame, CameraStream, ExposureTruth, FrameContent, ImuTruth, Meta, PacketFate, PoseTruth,
-    RecordingWriter, RigCalibration, Source, StrokeTruth, WorldTruth,
+    RecordingWriter, RigCalibration, Source, StrokeTruth, WorldTruth, WriterOptions,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -233,11 +233,22 @@ pub fn run(
                     _ => FrameContent::Blobs,
                 },
                 nominal_rate_hz: c.rate_hz,
+                exposure_s: c.timing.exposure_s,
+                readout_s: c.timing.readout_s,
             })
             .collect(),
         opts.truth,
     );
-    let mut w = RecordingWriter::create(out_dir, &meta)?;
+    // Images are stored compressed (a 60 s session of a 60 Hz stereo webcam is 2.2 GB as plain PGM), and
+    // buffered: a simulated recording can be made again, so it needs no per-record durability.
+    let mut w = RecordingWriter::create_with(
+        out_dir,
+        &meta,
+        WriterOptions {
+            compress_images: true,
+            ..WriterOptions::buffered()
+        },
+    )?;
     let mut summary = SimSummary {
         out_dir: out_dir.to_path_buf(),
         scenario: sc.name.clone(),
@@ -349,14 +360,15 @@ pub fn run(
         });
         let mut count = 0u64;
         for i in 0u64.. {
-            let nominal = cam.offset_s + i as f64 / cam.rate_hz;
+            let nominal = cam.nominal_frame_time(i);
             if nominal > duration_s {
                 break;
             }
             let t = (nominal + rng.gauss(cam.jitter_s)).max(0.0);
             let reported = (t + rng.gauss(cam.timestamp_noise_s)).max(0.0);
             let pose = traj.pose(t);
-            let obs = cam.observe(&pose, &sc.pen, scene, sc.hand.as_ref(), &mut rng);
+            let pose_at = |s: f64| traj.pose(s);
+            let obs = cam.observe(t, &pose_at, &sc.pen, scene, sc.hand.as_ref(), &mut rng);
             let mut frame = CameraFrame {
                 camera: ci as u8,
                 index: i,

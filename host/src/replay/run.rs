@@ -5,7 +5,7 @@ use std::time::Instant;
 use fires_record::{Damage, FrameContent, FrameImage, RecordError, RecordingReader};
 
 use super::imu_stream::{imu_stream, ImuStream};
-use crate::meta::{checked_pen_geometry, imu_scale, stereo_rig, MetaError};
+use crate::meta::{checked_pen_geometry, imu_scale, row_times_ns, stereo_rig, MetaError};
 
 use crate::session::{Session, StrokeConfig};
 use crate::stereo::CameraId;
@@ -172,6 +172,7 @@ pub fn replay(
 
     let mut tracker_cfg = config.tracker.clone();
     tracker_cfg.pen = checked_pen_geometry(meta, tracker_cfg.identify.tolerance)?;
+    tracker_cfg.row_time_ns = row_times_ns(meta);
     let truth = match config.world {
         WorldSource::Truth => reader.world_truth()?,
         WorldSource::Estimate => None,

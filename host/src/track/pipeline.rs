@@ -260,7 +260,8 @@ impl Tracker {
             CameraId::Left => (0, 1),
             CameraId::Right => (1, 0),
         };
-        self.align.push(this, t, frame.blobs);
+        // With a rolling shutter the frame's time becomes that of the rows its blobs lie on.
+        let t = self.align.push(this, t, frame.blobs);
         let t_other = self.align.current(other)?.t_ns;
         if t.abs_diff(t_other) > self.config.max_pair_dt_ns {
             return None;

@@ -31,11 +31,7 @@ pub fn test_meta(
         streams
             .iter()
             .enumerate()
-            .map(|(id, &provides)| CameraStream {
-                id: id as u8,
-                provides,
-                nominal_rate_hz: 15.0,
-            })
+            .map(|(id, &provides)| CameraStream::global(id as u8, provides, 15.0))
             .collect(),
         has_truth,
     )

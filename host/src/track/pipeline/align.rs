@@ -5,6 +5,12 @@
 //! LED once a vision sample labelled them) and the last two vision poses of the pen, which predict
 //! where the LEDs image in frames no vision sample labelled. Times are on the left camera's clock
 //! (docs/architecture.md §3).
+//!
+//! With a rolling shutter each row is exposed at its own time (`TrackerConfig::row_time_ns`), so a
+//! frame's blobs are not simultaneous: a kept frame's time is that of its blobs' median row, each
+//! blob keeps its own delay from it, and every blob of both cameras is moved to the pair's time
+//! with its image velocity (Ait-Aider et al., "Simultaneous object pose and velocity computation
+//! using a single view from a rolling shutter camera", ECCV 2006, model the same per-row times).
 
 use super::line_order::{match_along_line, LineOrderOptions};
 use super::TrackerConfig;
@@ -22,6 +28,21 @@ pub(super) struct KeptFrame {
     pub(super) blobs: Vec<[f64; 2]>,
     /// Blob index of each LED (index 0 = LED 1), once labelled.
     pub(super) labels: [Option<usize>; LED_COUNT],
+    /// Per blob, when it was exposed after `t_ns` (its row's rolling-shutter delay), nanoseconds;
+    /// empty for a global shutter (every blob at `t_ns`).
+    pub(super) blob_delay_ns: Vec<f64>,
+}
+
+impl KeptFrame {
+    /// Delay of blob `i`'s exposure after the frame time, nanoseconds.
+    pub(super) fn delay(&self, i: usize) -> f64 {
+        self.blob_delay_ns.get(i).copied().unwrap_or(0.0)
+    }
+
+    /// Exposure time of blob `i`, nanoseconds (left clock).
+    fn blob_time(&self, i: usize) -> f64 {
+        self.t_ns as f64 + self.delay(i)
+    }
 }
 
 /// The current and the previous frame of one camera.
@@ -35,12 +56,13 @@ pub(super) struct CameraHistory {
 
 impl CameraHistory {
     /// Makes a new frame the current one.
-    pub(super) fn push(&mut self, t_ns: u64, blobs: Vec<[f64; 2]>) {
+    pub(super) fn push(&mut self, t_ns: u64, blobs: Vec<[f64; 2]>, blob_delay_ns: Vec<f64>) {
         self.previous = self.current.take();
         self.current = Some(KeptFrame {
             t_ns,
             blobs,
             labels: [None; LED_COUNT],
+            blob_delay_ns,
         });
     }
 
@@ -61,6 +83,8 @@ pub(super) struct AlignOptions {
     pub(super) continuity_ns: u64,
     /// Largest image motion between consecutive frames used for velocity, pixels.
     pub(super) max_blob_motion_px: f64,
+    /// Rolling-shutter delay of one row, per camera, nanoseconds ([`TrackerConfig::row_time_ns`]).
+    pub(super) row_time_ns: [f64; 2],
 }
 
 impl AlignOptions {
@@ -70,6 +94,7 @@ impl AlignOptions {
             time_align: config.time_align,
             continuity_ns: config.continuity_ns,
             max_blob_motion_px: config.max_blob_motion_px,
+            row_time_ns: config.row_time_ns,
         }
     }
 }
@@ -83,6 +108,9 @@ pub(super) struct PairPoints {
     pub(super) this: usize,
     /// The other camera's current blobs moved to the pair's time, pixels.
     pub(super) aligned: Vec<[f64; 2]>,
+    /// This camera's blobs at the pair's time, pixels: the frame's own blobs, moved from their rows'
+    /// times with a rolling shutter.
+    pub(super) own: Vec<[f64; 2]>,
     /// Image velocity of each of those blobs, pixels per nanosecond (None: not moved).
     pub(super) aligned_velocity: Vec<Option<[f64; 2]>>,
     /// Undistorted left points.
@@ -92,19 +120,13 @@ pub(super) struct PairPoints {
 }
 
 impl PairPoints {
-    /// The pixel blobs of `camera` as the pair uses them: the newest frame's own blobs for the
-    /// camera that completed the pair, the aligned blobs for the other one.
-    pub(super) fn pixels<'a>(
-        &'a self,
-        align: &'a TimeAlignment,
-        camera: CameraId,
-    ) -> &'a [[f64; 2]] {
+    /// The pixel blobs of `camera` as the pair uses them: the newest frame's own blobs (moved from
+    /// their rows' times with a rolling shutter) for the camera that completed the pair, the
+    /// aligned blobs for the other one.
+    pub(super) fn pixels(&self, camera: CameraId) -> &[[f64; 2]] {
         let cam = usize::from(camera == CameraId::Right);
         if cam == self.this {
-            align.cameras[cam]
-                .current
-                .as_ref()
-                .map_or(&[], |f| f.blobs.as_slice())
+            &self.own
         } else {
             &self.aligned
         }
@@ -131,9 +153,22 @@ impl TimeAlignment {
         }
     }
 
-    /// Keeps a new frame of camera `cam` (0 left, 1 right) at `t_ns` (left clock).
-    pub(super) fn push(&mut self, cam: usize, t_ns: u64, blobs: Vec<[f64; 2]>) {
-        self.cameras[cam].push(t_ns, blobs);
+    /// Keeps a new frame of camera `cam` (0 left, 1 right) exposed at `t_ns` (left clock, its first
+    /// row) and returns the frame's time: `t_ns` for a global shutter, else the time of its blobs'
+    /// median row, from which each blob keeps its own row's delay.
+    pub(super) fn push(&mut self, cam: usize, t_ns: u64, blobs: Vec<[f64; 2]>) -> u64 {
+        let row = self.options.row_time_ns[cam];
+        if row <= 0.0 || blobs.is_empty() {
+            self.cameras[cam].push(t_ns, blobs, Vec::new());
+            return t_ns;
+        }
+        let mut rows: Vec<f64> = blobs.iter().map(|b| b[1]).collect();
+        rows.sort_by(f64::total_cmp);
+        let median = rows[rows.len() / 2].max(0.0);
+        let t = t_ns.saturating_add((row * median).round() as u64);
+        let delays = blobs.iter().map(|b| row * (b[1] - median)).collect();
+        self.cameras[cam].push(t, blobs, delays);
+        t
     }
 
     /// The newest frame of camera `cam`.
@@ -175,14 +210,19 @@ impl TimeAlignment {
                 points.aligned_velocity[i] = Some(v);
             }
         }
-        let own: &[[f64; 2]] = self.cameras[this]
-            .current
-            .as_ref()
-            .map_or(&[], |f| f.blobs.as_slice());
+        points.own.clear();
+        if let Some(cur) = &self.cameras[this].current {
+            points.own.extend_from_slice(&cur.blobs);
+        }
+        if self.options.time_align && self.options.row_time_ns[this] > 0.0 {
+            for (i, moved, _) in self.alignment(rig, this, t) {
+                points.own[i] = moved;
+            }
+        }
         let (l_px, r_px): (&[[f64; 2]], &[[f64; 2]]) = if this == 0 {
-            (own, &points.aligned)
+            (&points.own, &points.aligned)
         } else {
-            (&points.aligned, own)
+            (&points.aligned, &points.own)
         };
         undistort_all(&rig.left, l_px, &mut points.left_norm);
         undistort_all(&rig.right, r_px, &mut points.right_norm);
@@ -219,26 +259,37 @@ impl TimeAlignment {
             .filter(|p| p.t_ns < cur.t_ns && cur.t_ns - p.t_ns <= 100_000_000);
         let prev_ids = prev.map(|p| self.frame_identities(rig, camera, p));
         let shift = t as f64 - cur.t_ns as f64;
-        // Predicted LEDs at the other frame's time and at this one, computed once per frame.
-        let (at_frame, at_target) = (self.predicted_leds(cur.t_ns), self.predicted_leds(t));
+        // Predicted LEDs at the frame's time and at this one (or, when they coincide, one prediction
+        // step later: a rolling shutter still moves the blobs), computed once per frame.
+        let step = if shift != 0.0 {
+            shift
+        } else {
+            PREDICTION_STEP_NS
+        };
+        let (at_frame, at_target) = (
+            self.predicted_leds(cur.t_ns),
+            self.predicted_leds(cur.t_ns.saturating_add_signed(step as i64)),
+        );
         let project =
             |leds: Option<[Vector3<f64>; LED_COUNT]>, k: usize| rig.project(camera, &leds?[k]).ok();
         let mut out = Vec::new();
         for (k, id) in cur_ids.iter().enumerate() {
             let Some(i) = *id else { continue };
             let b = cur.blobs[i];
+            let own_shift = shift - cur.delay(i);
             let measured = prev.zip(prev_ids).and_then(|(p, ids)| {
-                let q = p.blobs[ids[k]?];
-                let dt = (cur.t_ns - p.t_ns) as f64;
-                ((b[0] - q[0]).hypot(b[1] - q[1]) <= self.options.max_blob_motion_px)
+                let j = ids[k]?;
+                let q = p.blobs[j];
+                let dt = cur.blob_time(i) - p.blob_time(j);
+                ((b[0] - q[0]).hypot(b[1] - q[1]) <= self.options.max_blob_motion_px && dt > 0.0)
                     .then(|| [(b[0] - q[0]) / dt, (b[1] - q[1]) / dt])
             });
             let v = measured.or_else(|| {
                 let (a, c) = (project(at_frame, k)?, project(at_target, k)?);
-                (shift != 0.0).then(|| [(c[0] - a[0]) / shift, (c[1] - a[1]) / shift])
+                Some([(c[0] - a[0]) / step, (c[1] - a[1]) / step])
             });
             if let Some(v) = v {
-                out.push((i, [b[0] + v[0] * shift, b[1] + v[1] * shift], v));
+                out.push((i, [b[0] + v[0] * own_shift, b[1] + v[1] * own_shift], v));
             }
         }
         if out.is_empty() {
@@ -248,11 +299,15 @@ impl TimeAlignment {
                     max_motion_px: self.options.max_blob_motion_px,
                     ..LineOrderOptions::default()
                 };
-                let dt = (cur.t_ns - p.t_ns) as f64;
                 for (q, i) in match_along_line(&p.blobs, &cur.blobs, &o).unwrap_or_default() {
                     let (a, b) = (p.blobs[q], cur.blobs[i]);
+                    let dt = cur.blob_time(i) - p.blob_time(q);
+                    let own_shift = shift - cur.delay(i);
+                    if dt <= 0.0 {
+                        continue;
+                    }
                     let v = [(b[0] - a[0]) / dt, (b[1] - a[1]) / dt];
-                    out.push((i, [b[0] + v[0] * shift, b[1] + v[1] * shift], v));
+                    out.push((i, [b[0] + v[0] * own_shift, b[1] + v[1] * own_shift], v));
                 }
             }
         }
@@ -328,6 +383,10 @@ impl TimeAlignment {
     }
 }
 
+/// The time step over which a predicted pen motion gives an image velocity when the blobs' frame
+/// is the pair's own (a rolling shutter's rows still need moving), nanoseconds.
+const PREDICTION_STEP_NS: f64 = 10_000_000.0;
+
 /// Undistorts every blob into `out`, index for index.
 fn undistort_all(cam: &CameraModel, px: &[[f64; 2]], out: &mut Vec<[f64; 2]>) {
     out.clear();
@@ -348,6 +407,7 @@ mod tests {
         time_align: true,
         continuity_ns: 100_000_000,
         max_blob_motion_px: 40.0,
+        row_time_ns: [0.0; 2],
     };
 
     fn rig() -> StereoRig {
@@ -364,9 +424,9 @@ mod tests {
     #[test]
     fn a_camera_keeps_its_last_two_frames_and_labels_the_newest() {
         let mut h = CameraHistory::default();
-        h.push(1, vec![[1.0, 2.0]]);
+        h.push(1, vec![[1.0, 2.0]], Vec::new());
         h.label_current([Some(0), None, None, None]);
-        h.push(2, vec![[3.0, 4.0]]);
+        h.push(2, vec![[3.0, 4.0]], Vec::new());
         let (cur, prev) = (h.current.as_ref().unwrap(), h.previous.as_ref().unwrap());
         assert_eq!((cur.t_ns, prev.t_ns), (2, 1));
         assert_eq!(prev.labels[0], Some(0));
@@ -412,6 +472,7 @@ mod tests {
             t_ns: 0,
             blobs: blobs.clone(),
             labels: [None; LED_COUNT],
+            blob_delay_ns: Vec::new(),
         };
         assert_eq!(
             a.frame_identities(&rig, CameraId::Left, &frame),
@@ -461,9 +522,9 @@ mod tests {
         a.push(0, 33_000_000, vec![[500.0, 300.0]]);
         let mut points = PairPoints::default();
         a.prepare(&rig, 0, 33_000_000, &mut points);
-        assert_eq!(points.pixels(&a, CameraId::Left), &[[500.0, 300.0]]);
-        assert_eq!(points.pixels(&a, CameraId::Right).len(), 3);
-        assert!((points.pixels(&a, CameraId::Right)[2][0] - want[2][0]).abs() < 1e-9);
+        assert_eq!(points.pixels(CameraId::Left), &[[500.0, 300.0]]);
+        assert_eq!(points.pixels(CameraId::Right).len(), 3);
+        assert!((points.pixels(CameraId::Right)[2][0] - want[2][0]).abs() < 1e-9);
         assert_eq!((points.left_norm.len(), points.right_norm.len()), (1, 3));
         // Without time alignment the blobs stay where they were imaged.
         let still = TimeAlignment {

@@ -59,6 +59,10 @@ pub struct TrackerConfig {
     pub right_clock_offset_ns: i64,
     /// Move the other camera's blobs to the frame time using their image velocity.
     pub time_align: bool,
+    /// Rolling shutter of each camera (left, right): the delay of one pixel row after the previous,
+    /// nanoseconds (0: a global shutter). A blob on row `y` was exposed `y` rows after the frame time;
+    /// with `time_align` every blob is moved to the pair's time with its image velocity.
+    pub row_time_ns: [f64; 2],
     /// A labelling is refused when two of the pen's LEDs image closer than this in either camera,
     /// pixels: the spots overlap (pen pointing at a camera), so which blob is which LED is a guess.
     pub min_image_separation_px: f64,
@@ -129,6 +133,7 @@ impl Default for TrackerConfig {
             max_pair_dt_ns: 40_000_000,
             right_clock_offset_ns: 0,
             time_align: true,
+            row_time_ns: [0.0; 2],
             min_image_separation_px: 4.0,
             max_pen_speed_mps: 1.5,
             measured_speed_factor: 2.0,

@@ -163,7 +163,7 @@ impl LabelGuard {
     pub(super) fn labels_match_prediction(&self, pair: &PairView<'_>, id: &Identification) -> bool {
         let cands = pair.candidates;
         for camera in [CameraId::Left, CameraId::Right] {
-            let blobs = pair.points.pixels(pair.align, camera);
+            let blobs = pair.points.pixels(camera);
             let Some(px) = pair.align.predicted_images(pair.rig, camera, pair.t) else {
                 return false;
             };
@@ -276,6 +276,7 @@ mod tests {
                 time_align: false,
                 continuity_ns: 100_000_000,
                 max_blob_motion_px: 40.0,
+                row_time_ns: [0.0; 2],
             });
             for (cam, camera) in [CameraId::Left, CameraId::Right].into_iter().enumerate() {
                 let blobs = leds
