@@ -10,8 +10,8 @@ use fires_sim::{run_scenario, SimOptions, SimSummary, SCENARIOS};
 /// What to simulate: shared by `fires sim` and `fires demo`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct SessionArgs {
-    /// Named scenario (see `fires sim --help` for the list).
-    #[arg(long, default_value = "fires-v2")]
+    /// Named scenario (see `fires sim --help` for the list); `webcam`, two 60 Hz IR webcams, by default.
+    #[arg(long, default_value = "webcam")]
     pub scenario: String,
     /// Random seed; the same seed gives a byte-identical recording.
     #[arg(long, default_value_t = 1)]

@@ -62,8 +62,8 @@ fn damaged_recording_replays_what_is_whole_and_reports_the_rest() {
     std::fs::write(&link, &bytes[..cut]).expect("truncate");
     let kept_bytes: usize = chunks[..k].iter().map(|c| c.bytes.len()).sum();
     // One image deleted, one cut short.
-    std::fs::remove_file(rec.join("cam1").join("000005.pgm")).expect("delete");
-    let short = rec.join("cam0").join("000010.pgm");
+    std::fs::remove_file(rec.join("cam1").join("000005.pgm.zst")).expect("delete");
+    let short = rec.join("cam0").join("000010.pgm.zst");
     let img = std::fs::read(&short).expect("image");
     std::fs::write(&short, &img[..img.len() - 100]).expect("cut short");
 
@@ -90,10 +90,10 @@ fn damaged_recording_replays_what_is_whole_and_reports_the_rest() {
         .any(|w| w.contains("link.bin") && w.contains("torn")));
     assert!(warnings
         .iter()
-        .any(|w| w.contains("cam1/000005.pgm") && w.contains("missing")));
+        .any(|w| w.contains("cam1/000005.pgm.zst") && w.contains("missing")));
     assert!(warnings
         .iter()
-        .any(|w| w.contains("cam0/000010.pgm") && w.contains("unreadable")));
+        .any(|w| w.contains("cam0/000010.pgm.zst") && w.contains("unreadable")));
     // The kept link bytes are all decoded; every listed frame is counted; the rest is tracked.
     assert_eq!(r["link"]["bytes"], kept_bytes as u64);
     let listed = [

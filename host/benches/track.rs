@@ -51,11 +51,7 @@ fn recording(rig: &StereoRig, seconds: f64) -> Vec<Event> {
                     .flatten()
                     .copied()
                     .collect();
-                Event::Frame(CameraFrame {
-                    camera,
-                    t_ns: t,
-                    blobs,
-                })
+                Event::Frame(CameraFrame::new(camera, t, blobs))
             }
         })
         .collect()

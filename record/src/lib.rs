@@ -28,7 +28,7 @@ pub mod writer;
 
 pub use damage::{Damage, DamageLog};
 pub use error::RecordError;
-pub use image::GrayImage;
+pub use image::{EncodedImage, GrayImage, ImageEncoder};
 pub use meta::{
     CalibratedCamera, CameraModel, CameraStream, Extrinsics, FrameContent, LinkInfo, Meta,
     PenGeometry, RigCalibration, Source, UndistortError, FORMAT_MAJOR, FORMAT_NAME, FORMAT_VERSION,

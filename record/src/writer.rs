@@ -7,12 +7,10 @@
 //! about that much. Image files are written whole before the frame line that names them.
 
 use crate::error::RecordError;
-use crate::image::GrayImage;
+use crate::image::{EncodedImage, GrayImage};
 use crate::meta::Meta;
 use crate::truth::{ExposureTruth, ImuTruth, PacketTruth, StrokeTruth, WorldTruth};
-use crate::{
-    camera_dir_name, compressed_image_file_name, image_file_name, CameraFrame, LinkChunk,
-};
+use crate::{camera_dir_name, CameraFrame, LinkChunk};
 use serde::Serialize;
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
@@ -280,12 +278,25 @@ impl RecordingWriter {
     }
 
     /// Appends one frame; if `image` is given it is written as `cam{N}/{index:06}.pgm` (`.pgm.zst` when
-    /// [`WriterOptions::compress_images`]) and `frame.image` is set
-    /// to that name.
+    /// [`WriterOptions::compress_images`]) and `frame.image` is set to that name.
     pub fn write_frame(
         &mut self,
         frame: &CameraFrame,
         image: Option<&GrayImage>,
+    ) -> Result<(), RecordError> {
+        let encoded = image
+            .map(|img| EncodedImage::encode(img, self.options.compress_images))
+            .transpose()
+            .map_err(|e| RecordError::io(self.dir.join(camera_dir_name(frame.camera)), e))?;
+        self.write_frame_encoded(frame, encoded.as_ref())
+    }
+
+    /// As [`RecordingWriter::write_frame`] with the image already encoded (so encoding can run on other
+    /// threads); its own compression choice is kept.
+    pub fn write_frame_encoded(
+        &mut self,
+        frame: &CameraFrame,
+        image: Option<&EncodedImage>,
     ) -> Result<(), RecordError> {
         let cam = frame.camera;
         let out = self
@@ -295,18 +306,13 @@ impl RecordingWriter {
             .ok_or(RecordError::UnknownCamera { camera: cam })?;
         match image {
             Some(img) => {
-                let (name, bytes) = if self.options.compress_images {
-                    let name = compressed_image_file_name(frame.index);
-                    let bytes = img.to_pgm_zst().map_err(|e| RecordError::io(&name, e))?;
-                    (name, bytes)
-                } else {
-                    (image_file_name(frame.index), img.to_pgm())
-                };
+                let name = img.file_name(frame.index);
+                let bytes = &img.bytes;
                 let cdir = self.dir.join(camera_dir_name(cam));
                 let path = cdir.join(&name);
                 // The image is whole on the file system before the line naming it is written.
                 let mut file = File::create(&path).map_err(|e| RecordError::io(&path, e))?;
-                file.write_all(&bytes)
+                file.write_all(bytes)
                     .map_err(|e| RecordError::io(&path, e))?;
                 let mut f = frame.clone();
                 f.image = Some(name);

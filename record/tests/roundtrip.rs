@@ -168,10 +168,11 @@ fn unknown_major_version_is_rejected_and_minor_is_accepted() {
     write_sample(dir.path());
     let path = dir.path().join("meta.json");
     let text = fs::read_to_string(&path).unwrap();
-    fs::write(&path, text.replace("\"1.0\"", "\"1.7\"")).unwrap();
+    let current = format!("\"{}\"", fires_record::FORMAT_VERSION);
+    fs::write(&path, text.replace(&current, "\"1.7\"")).unwrap();
     RecordingReader::open(dir.path()).unwrap();
     for bad in ["\"2.0\"", "\"1\"", "\"x.y\"", "\"1.\""] {
-        fs::write(&path, text.replace("\"1.0\"", bad)).unwrap();
+        fs::write(&path, text.replace(&current, bad)).unwrap();
         let e = RecordingReader::open(dir.path()).unwrap_err();
         assert!(
             matches!(e, RecordError::UnsupportedVersion { .. }),

@@ -264,7 +264,8 @@ impl CameraConfig {
                 });
                 if let Some(sc) = scene {
                     if rng.chance(self.reflection_rate) {
-                        if let Some(spot) = self.reflection(sc, &pose.tip, &led, gain * brightness) {
+                        if let Some(spot) = self.reflection(sc, &pose.tip, &led, gain * brightness)
+                        {
                             out.spurious.push(spot);
                         }
                     }
@@ -536,7 +537,14 @@ mod tests {
         assert_eq!(vis[0], Visibility::Visible);
         assert_eq!(vis[2], Visibility::Visible);
         // Brightness falls with the square of the distance.
-        let far = cam.observe(0.0, &still(pose(V3::new(0.0, 0.0, 2.0))), &pen, None, None, &mut rng);
+        let far = cam.observe(
+            0.0,
+            &still(pose(V3::new(0.0, 0.0, 2.0))),
+            &pen,
+            None,
+            None,
+            &mut rng,
+        );
         let ratio = free.leds[0].brightness / far.leds[0].brightness;
         let (d1, d2) = (1.0 - 0.02, 2.0 - 0.02);
         assert!((ratio - (d2 * d2) / (d1 * d1)).abs() < 1e-9);

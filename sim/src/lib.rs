@@ -29,4 +29,14 @@ pub enum SimError {
     /// Writing the recording failed.
     #[error(transparent)]
     Record(#[from] fires_record::RecordError),
+    /// A frame image could not be encoded (the compressor could not allocate).
+    #[error("encoding image {index} of camera {camera}: {cause}")]
+    Encode {
+        /// Camera index.
+        camera: usize,
+        /// Frame index.
+        index: u64,
+        /// What failed.
+        cause: std::io::Error,
+    },
 }

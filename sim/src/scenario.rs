@@ -288,14 +288,7 @@ fn webcam_rig(rates: [f64; 2], phases: [f64; 2]) -> Vec<CameraConfig> {
     };
     (0..2)
         .map(|i| CameraConfig {
-            cal: webcam_camera(
-                if i == 0 {
-                    Extrinsics::IDENTITY
-                } else {
-                    right
-                },
-                i == 1,
-            ),
+            cal: webcam_camera(if i == 0 { Extrinsics::IDENTITY } else { right }, i == 1),
             rate_hz: 60.0,
             offset_s: 0.03 + phases[i],
             // A free-running crystal: exposures keep their period; the host stamps frames on USB arrival.

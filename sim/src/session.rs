@@ -15,8 +15,9 @@ use crate::rng::SimRng;
 use crate::scenario::{scenario, world_up, MotionSpec, Scenario};
 use crate::SimError;
 use fires_record::{
-    CameraFrame, CameraStream, ExposureTruth, FrameContent, ImuTruth, Meta, PacketFate, PoseTruth,
-    RecordingWriter, RigCalibration, Source, StrokeTruth, WorldTruth, WriterOptions,
+    CameraFrame, CameraStream, EncodedImage, ExposureTruth, FrameContent, ImageEncoder, ImuTruth,
+    Meta, PacketFate, PoseTruth, RecordingWriter, RigCalibration, Source, StrokeTruth, WorldTruth,
+    WriterOptions,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -239,16 +240,10 @@ pub fn run(
             .collect(),
         opts.truth,
     );
-    // Images are stored compressed (a 60 s session of a 60 Hz stereo webcam is 2.2 GB as plain PGM), and
-    // buffered: a simulated recording can be made again, so it needs no per-record durability.
-    let mut w = RecordingWriter::create_with(
-        out_dir,
-        &meta,
-        WriterOptions {
-            compress_images: true,
-            ..WriterOptions::buffered()
-        },
-    )?;
+    // Images are stored compressed (a 60 s session of a 60 Hz stereo webcam is 2.2 GB as plain PGM: see
+    // `render_camera`), and buffered: a simulated recording can be made again, so it needs no per-record
+    // durability.
+    let mut w = RecordingWriter::create_with(out_dir, &meta, WriterOptions::buffered())?;
     let mut summary = SimSummary {
         out_dir: out_dir.to_path_buf(),
         scenario: sc.name.clone(),
@@ -342,66 +337,27 @@ pub fn run(
         }
     }
 
-    // Cameras.
+    // Cameras: each renders (and compresses) on its own thread from its own random streams, so the files do
+    // not depend on scheduling; the frames are then written in order.
     let scene = traj.scene().map(|s| s.as_ref());
+    let traj_ref = &traj;
+    let rendered: Vec<RenderedCamera> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..sc.cameras.len())
+            .map(|ci| scope.spawn(move || render_camera(sc, ci, traj_ref, seed, duration_s, opts)))
+            .collect();
+        workers
+            .into_iter()
+            .map(|w| w.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect::<Result<_, _>>()
+    })?;
     let mut exposures: Vec<ExposureTruth> = Vec::new();
-    for (ci, cam) in sc.cameras.iter().enumerate() {
-        let mut rng = SimRng::stream(seed, 10 + ci as u64);
-        let mut render_rng = SimRng::stream(seed, 30 + ci as u64);
-        let m = cam.cal.intrinsics;
-        let images = opts.images && matches!(cam.output, CameraOutput::Images(_));
-        let table = images.then(|| {
-            NoiseTable::new(
-                m.width,
-                m.height,
-                cam.output.image_model(),
-                &mut SimRng::stream(seed, 20 + ci as u64),
-            )
-        });
-        let mut count = 0u64;
-        for i in 0u64.. {
-            let nominal = cam.nominal_frame_time(i);
-            if nominal > duration_s {
-                break;
-            }
-            let t = (nominal + rng.gauss(cam.jitter_s)).max(0.0);
-            let reported = (t + rng.gauss(cam.timestamp_noise_s)).max(0.0);
-            let pose = traj.pose(t);
-            let pose_at = |s: f64| traj.pose(s);
-            let obs = cam.observe(t, &pose_at, &sc.pen, scene, sc.hand.as_ref(), &mut rng);
-            let mut frame = CameraFrame {
-                camera: ci as u8,
-                index: i,
-                exposure_time_ns: host_ns(HOST_ORIGIN_NS, reported),
-                blobs: None,
-                image: None,
-            };
-            match &table {
-                Some(table) => {
-                    let spots: Vec<_> =
-                        obs.led_spots.iter().chain(&obs.spurious).copied().collect();
-                    let img = table.render(m.width, m.height, &spots, &mut render_rng);
-                    w.write_frame(&frame, Some(&img))?;
-                    summary.images += 1;
-                }
-                None => {
-                    frame.blobs = Some(cam.blobs(&obs, &mut rng));
-                    w.write_frame(&frame, None)?;
-                }
-            }
-            if opts.truth {
-                exposures.push(ExposureTruth {
-                    camera: ci as u8,
-                    index: i,
-                    exposure_time_ns: host_ns(HOST_ORIGIN_NS, t),
-                    pose: pose_truth(sc, &pose),
-                    leds: obs.leds,
-                    spurious: obs.spurious.iter().map(|s| s.px).collect(),
-                });
-            }
-            count += 1;
+    for cam in rendered {
+        for (frame, image) in &cam.frames {
+            w.write_frame_encoded(frame, image.as_ref())?;
         }
-        summary.frames.push(count);
+        summary.images += cam.frames.iter().filter(|f| f.1.is_some()).count() as u64;
+        summary.frames.push(cam.frames.len() as u64);
+        exposures.extend(cam.exposures);
     }
     exposures.sort_by_key(|e| (e.exposure_time_ns, e.camera, e.index));
     for e in &exposures {
@@ -435,6 +391,89 @@ pub fn run(
     }
     w.finish()?;
     Ok(summary)
+}
+
+/// One camera's frames (with their encoded images) and exposure truth.
+struct RenderedCamera {
+    frames: Vec<(CameraFrame, Option<EncodedImage>)>,
+    exposures: Vec<ExposureTruth>,
+}
+
+/// Renders every frame of camera `ci` over the session: exposure times on its free-running clock, what it sees
+/// (rolling shutter and smear, [`crate::camera::CameraConfig::observe`]), and the image or blob list.
+fn render_camera(
+    sc: &Scenario,
+    ci: usize,
+    traj: &Trajectory,
+    seed: u64,
+    duration_s: f64,
+    opts: SimOptions,
+) -> Result<RenderedCamera, SimError> {
+    let cam = &sc.cameras[ci];
+    let scene = traj.scene().map(|s| s.as_ref());
+    let mut rng = SimRng::stream(seed, 10 + ci as u64);
+    let mut render_rng = SimRng::stream(seed, 30 + ci as u64);
+    let m = cam.cal.intrinsics;
+    let images = opts.images && matches!(cam.output, CameraOutput::Images(_));
+    let table = images.then(|| {
+        NoiseTable::new(
+            m.width,
+            m.height,
+            cam.output.image_model(),
+            &mut SimRng::stream(seed, 20 + ci as u64),
+        )
+    });
+    let mut out = RenderedCamera {
+        frames: Vec::new(),
+        exposures: Vec::new(),
+    };
+    let encode_error = |index, cause| SimError::Encode {
+        camera: ci,
+        index,
+        cause,
+    };
+    let mut encoder = ImageEncoder::new(true).map_err(|e| encode_error(0, e))?;
+    for i in 0u64.. {
+        let nominal = cam.nominal_frame_time(i);
+        if nominal > duration_s {
+            break;
+        }
+        let t = (nominal + rng.gauss(cam.jitter_s)).max(0.0);
+        let reported = (t + rng.gauss(cam.timestamp_noise_s)).max(0.0);
+        let pose = traj.pose(t);
+        let pose_at = |s: f64| traj.pose(s);
+        let obs = cam.observe(t, &pose_at, &sc.pen, scene, sc.hand.as_ref(), &mut rng);
+        let mut frame = CameraFrame {
+            camera: ci as u8,
+            index: i,
+            exposure_time_ns: host_ns(HOST_ORIGIN_NS, reported),
+            blobs: None,
+            image: None,
+        };
+        let image = match &table {
+            Some(table) => {
+                let spots: Vec<_> = obs.led_spots.iter().chain(&obs.spurious).copied().collect();
+                let img = table.render(m.width, m.height, &spots, &mut render_rng);
+                Some(encoder.encode(&img).map_err(|e| encode_error(i, e))?)
+            }
+            None => {
+                frame.blobs = Some(cam.blobs(&obs, &mut rng));
+                None
+            }
+        };
+        out.frames.push((frame, image));
+        if opts.truth {
+            out.exposures.push(ExposureTruth {
+                camera: ci as u8,
+                index: i,
+                exposure_time_ns: host_ns(HOST_ORIGIN_NS, t),
+                pose: pose_truth(sc, &pose),
+                leds: obs.leds,
+                spurious: obs.spurious.iter().map(|s| s.px).collect(),
+            });
+        }
+    }
+    Ok(out)
 }
 
 /// The strokes drawn in the first `duration_s` seconds of a drawing trajectory, as `truth/strokes.json`

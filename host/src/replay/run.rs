@@ -10,7 +10,9 @@ use crate::meta::{checked_pen_geometry, imu_scale, row_times_ns, stereo_rig, Met
 use crate::session::{Session, StrokeConfig};
 use crate::stereo::CameraId;
 use crate::track::fusion::{MagOffset, WorldFit, WorldReference};
-use crate::track::pipeline::{CameraFrame, Refusal, TrackSample, Tracker, TrackerConfig};
+use crate::track::pipeline::{
+    area_radius, CameraFrame, Refusal, TrackSample, Tracker, TrackerConfig,
+};
 use crate::vision::{BlobConfig, BlobDetector, GrayImage};
 
 /// What to run.
@@ -254,6 +256,13 @@ pub fn replay(
                             right_frame: *r,
                             refusal: session.tracker().last_refusal(),
                         });
+                        if std::env::var_os("FIRES_DEBUG_PAIRS").is_some() {
+                            eprintln!(
+                                "PAIR {} {:?}",
+                                s.track.t_ns,
+                                session.tracker().last_refusal()
+                            );
+                        }
                     }
                     samples.push(s.track);
                     display_tips.push(s.display_tip);
@@ -340,16 +349,13 @@ fn camera_frame(
             camera: id,
             t_ns: f.exposure_time_ns,
             blobs: blobs.iter().map(|b| [b.x, b.y]).collect(),
+            radii: blobs.iter().map(|b| area_radius(b.area)).collect(),
         }));
     }
     let img = match reader.frame_image(f)? {
         FrameImage::Image(img) => img,
         FrameImage::NoImage => {
-            return Ok(Some(CameraFrame {
-                camera: id,
-                t_ns: f.exposure_time_ns,
-                blobs: Vec::new(),
-            }))
+            return Ok(Some(CameraFrame::new(id, f.exposure_time_ns, Vec::new())))
         }
         FrameImage::Lost => return Ok(None),
     };

@@ -16,9 +16,9 @@
 //! let imu = ImuSample { t_ns: 1_000_000, accel: [0.0, 0.0, 9.81], gyro: [0.0; 3], mag: [0.0, 30.0, 20.0] };
 //! let _ = tracker.push_imu(&imu); // Some(sample) only while the tip is occluded
 //! // ...and blob centres (pixels) per camera frame with the exposure time.
-//! let left = CameraFrame { camera: CameraId::Left, t_ns: 2_000_000, blobs: vec![[500.0, 300.0]] };
+//! let left = CameraFrame::new(CameraId::Left, 2_000_000, vec![[500.0, 300.0]]);
 //! assert!(tracker.push_frame(left).is_none()); // no right frame to pair with yet
-//! let right = CameraFrame { camera: CameraId::Right, t_ns: 2_100_000, blobs: vec![[300.0, 300.0]] };
+//! let right = CameraFrame::new(CameraId::Right, 2_100_000, vec![[300.0, 300.0]]);
 //! let sample = tracker.push_frame(right).expect("paired");
 //! assert_eq!(sample.quality, TrackQuality::Lost); // one blob is not a pen
 //! ```

@@ -62,17 +62,41 @@ pub struct CameraFrame {
     pub t_ns: u64,
     /// Blob centres, pixels.
     pub blobs: Vec<[f64; 2]>,
+    /// Radius of each blob's thresholded area, pixels (`sqrt(area / pi)`); empty when unknown.
+    /// Two spots closer than their radii merge into one blob, so the radii set how far apart
+    /// the pen's LED images must be for a labelling to be trusted.
+    #[serde(default)]
+    pub radii: Vec<f64>,
 }
 
 impl CameraFrame {
-    /// A frame from detected blobs (their sub-pixel centres, in the detector's order).
+    /// A frame of blob centres whose sizes are unknown.
+    pub fn new(camera: CameraId, t_ns: u64, blobs: Vec<[f64; 2]>) -> Self {
+        Self {
+            camera,
+            t_ns,
+            blobs,
+            radii: Vec::new(),
+        }
+    }
+
+    /// A frame from detected blobs (their sub-pixel centres and areas, in the detector's order).
     pub fn from_blobs(camera: CameraId, t_ns: u64, blobs: &[crate::vision::Blob]) -> Self {
         Self {
             camera,
             t_ns,
             blobs: blobs.iter().map(|b| [b.x, b.y]).collect(),
+            radii: blobs
+                .iter()
+                .map(|b| area_radius(f64::from(b.area)))
+                .collect(),
         }
     }
+}
+
+/// Radius of a disc of `area` square pixels.
+pub fn area_radius(area: f64) -> f64 {
+    (area.max(0.0) / std::f64::consts::PI).sqrt()
 }
 
 /// How a sample's tip was obtained.
@@ -261,7 +285,7 @@ impl Tracker {
             CameraId::Right => (1, 0),
         };
         // With a rolling shutter the frame's time becomes that of the rows its blobs lie on.
-        let t = self.align.push(this, t, frame.blobs);
+        let t = self.align.push(this, t, frame.blobs, frame.radii);
         let t_other = self.align.current(other)?.t_ns;
         if t.abs_diff(t_other) > self.config.max_pair_dt_ns {
             return None;
@@ -322,7 +346,7 @@ impl Tracker {
             }
         };
         // The vision tip (its axis also feeds the safety checks and the fusion).
-        let Ok(vision) = self.tip.estimate(&id.points) else {
+        let Ok(mut vision) = self.tip.estimate(&id.points) else {
             return self.refused(t, Refusal::Tip);
         };
         // Safety.
@@ -334,6 +358,24 @@ impl Tracker {
             tip: &self.tip,
             t,
         };
+        // An LED whose image touches another's was seen as a merged blob, half-way between the
+        // two: a labelling of at least three LEDs keeps the others (at least two) and drops it.
+        let mut id = id;
+        if let Some(merged) = self.labels.merged_leds(&pair, &vision, &id) {
+            let kept = (0..LED_COUNT)
+                .filter(|&k| id.assignment[k].is_some() && !merged[k])
+                .count();
+            if merged.iter().any(|&m| m) && id.count() >= 3 && kept >= 2 {
+                for k in (0..LED_COUNT).filter(|&k| merged[k]) {
+                    id.assignment[k] = None;
+                    id.points[k] = None;
+                }
+                match self.tip.estimate(&id.points) {
+                    Ok(v) => vision = v,
+                    Err(_) => return self.refused(t, Refusal::Tip),
+                }
+            }
+        }
         if let Some(why) = self.labels.check(&pair, &id, &vision, stale) {
             return self.refused(t, Refusal::Safety(why));
         }

@@ -28,6 +28,8 @@ pub(super) struct KeptFrame {
     pub(super) blobs: Vec<[f64; 2]>,
     /// Blob index of each LED (index 0 = LED 1), once labelled.
     pub(super) labels: [Option<usize>; LED_COUNT],
+    /// Per blob, the radius of its thresholded area, pixels (empty when unknown).
+    pub(super) radii: Vec<f64>,
     /// Per blob, when it was exposed after `t_ns` (its row's rolling-shutter delay), nanoseconds;
     /// empty for a global shutter (every blob at `t_ns`).
     pub(super) blob_delay_ns: Vec<f64>,
@@ -56,12 +58,19 @@ pub(super) struct CameraHistory {
 
 impl CameraHistory {
     /// Makes a new frame the current one.
-    pub(super) fn push(&mut self, t_ns: u64, blobs: Vec<[f64; 2]>, blob_delay_ns: Vec<f64>) {
+    pub(super) fn push(
+        &mut self,
+        t_ns: u64,
+        blobs: Vec<[f64; 2]>,
+        radii: Vec<f64>,
+        blob_delay_ns: Vec<f64>,
+    ) {
         self.previous = self.current.take();
         self.current = Some(KeptFrame {
             t_ns,
             blobs,
             labels: [None; LED_COUNT],
+            radii,
             blob_delay_ns,
         });
     }
@@ -154,12 +163,18 @@ impl TimeAlignment {
     }
 
     /// Keeps a new frame of camera `cam` (0 left, 1 right) exposed at `t_ns` (left clock, its first
-    /// row) and returns the frame's time: `t_ns` for a global shutter, else the time of its blobs'
+    /// row), with its blobs' radii (empty when unknown), and returns the frame's time: `t_ns` for a global shutter, else the time of its blobs'
     /// median row, from which each blob keeps its own row's delay.
-    pub(super) fn push(&mut self, cam: usize, t_ns: u64, blobs: Vec<[f64; 2]>) -> u64 {
+    pub(super) fn push(
+        &mut self,
+        cam: usize,
+        t_ns: u64,
+        blobs: Vec<[f64; 2]>,
+        radii: Vec<f64>,
+    ) -> u64 {
         let row = self.options.row_time_ns[cam];
         if row <= 0.0 || blobs.is_empty() {
-            self.cameras[cam].push(t_ns, blobs, Vec::new());
+            self.cameras[cam].push(t_ns, blobs, radii, Vec::new());
             return t_ns;
         }
         let mut rows: Vec<f64> = blobs.iter().map(|b| b[1]).collect();
@@ -167,7 +182,7 @@ impl TimeAlignment {
         let median = rows[rows.len() / 2].max(0.0);
         let t = t_ns.saturating_add((row * median).round() as u64);
         let delays = blobs.iter().map(|b| row * (b[1] - median)).collect();
-        self.cameras[cam].push(t, blobs, delays);
+        self.cameras[cam].push(t, blobs, radii, delays);
         t
     }
 
@@ -424,9 +439,9 @@ mod tests {
     #[test]
     fn a_camera_keeps_its_last_two_frames_and_labels_the_newest() {
         let mut h = CameraHistory::default();
-        h.push(1, vec![[1.0, 2.0]], Vec::new());
+        h.push(1, vec![[1.0, 2.0]], Vec::new(), Vec::new());
         h.label_current([Some(0), None, None, None]);
-        h.push(2, vec![[3.0, 4.0]], Vec::new());
+        h.push(2, vec![[3.0, 4.0]], Vec::new(), Vec::new());
         let (cur, prev) = (h.current.as_ref().unwrap(), h.previous.as_ref().unwrap());
         assert_eq!((cur.t_ns, prev.t_ns), (2, 1));
         assert_eq!(prev.labels[0], Some(0));
@@ -472,6 +487,7 @@ mod tests {
             t_ns: 0,
             blobs: blobs.clone(),
             labels: [None; LED_COUNT],
+            radii: Vec::new(),
             blob_delay_ns: Vec::new(),
         };
         assert_eq!(
@@ -507,9 +523,9 @@ mod tests {
                 .map(|b| [b[0] + v[0] * t as f64, b[1] + v[1] * t as f64])
                 .collect()
         };
-        a.push(1, 10_000_000, at(10_000_000));
+        a.push(1, 10_000_000, at(10_000_000), Vec::new());
         a.label(1, [Some(0), Some(1), None, Some(2)], [None; LED_COUNT]);
-        a.push(1, 26_000_000, at(26_000_000));
+        a.push(1, 26_000_000, at(26_000_000), Vec::new());
         a.label(1, [Some(0), Some(1), None, Some(2)], [None; LED_COUNT]);
         let moved = a.alignment(&rig, 1, 33_000_000);
         assert_eq!(moved.len(), 3);
@@ -519,7 +535,7 @@ mod tests {
             assert!((vel[0] - v[0]).abs() < 1e-15 && (vel[1] - v[1]).abs() < 1e-15);
         }
         // Filling a pair: the left frame's own blobs stay, the right ones are the moved ones.
-        a.push(0, 33_000_000, vec![[500.0, 300.0]]);
+        a.push(0, 33_000_000, vec![[500.0, 300.0]], Vec::new());
         let mut points = PairPoints::default();
         a.prepare(&rig, 0, 33_000_000, &mut points);
         assert_eq!(points.pixels(CameraId::Left), &[[500.0, 300.0]]);
@@ -553,10 +569,10 @@ mod tests {
                 .map(|b| [b[0] + v[0] * t as f64, b[1] + v[1] * t as f64])
                 .collect()
         };
-        a.push(1, 10_000_000, at(10_000_000));
+        a.push(1, 10_000_000, at(10_000_000), Vec::new());
         let mut shuffled = at(76_000_000);
         shuffled.swap(0, 2);
-        a.push(1, 76_000_000, shuffled);
+        a.push(1, 76_000_000, shuffled, Vec::new());
         let moved = a.alignment(&rig, 1, 100_000_000);
         assert_eq!(moved.len(), 3);
         let mut want = at(100_000_000);
@@ -568,7 +584,7 @@ mod tests {
         // Blobs that are not on one line (interference) are not moved.
         let mut off = at(142_000_000);
         off[1][1] += 8.0;
-        a.push(1, 142_000_000, off);
+        a.push(1, 142_000_000, off, Vec::new());
         assert!(a.alignment(&rig, 1, 150_000_000).is_empty());
     }
 }

@@ -38,6 +38,11 @@ pub enum Unsafe {
     BlobNotIsolated,
 }
 
+/// Two LED images must lie this many times the sum of their blobs' radii apart: spots whose
+/// thresholded discs touch merge into one blob, and a blob grown by motion blur or a neighbour's
+/// faint tail is up to this much wider than its disc.
+const MERGE_MARGIN: f64 = 1.2;
+
 /// Accepted labels and the checks a new labelling must pass.
 #[derive(Debug, Clone)]
 pub(super) struct LabelGuard {
@@ -104,7 +109,7 @@ impl LabelGuard {
         if id.count() < 3 && (stale_prior || !self.labels_match_prediction(pair, id)) {
             return Some(Unsafe::TwoLedsUnconfirmed);
         }
-        if !self.pen_images_separated(pair, vision) {
+        if !self.pen_images_separated(pair, vision, id) {
             return Some(Unsafe::PenImagesOverlap);
         }
         (!self.labelled_blobs_isolated(pair, id)).then_some(Unsafe::BlobNotIsolated)
@@ -134,27 +139,68 @@ impl LabelGuard {
             .all(|c| isolated(0, c.left) && isolated(1, c.right))
     }
 
-    /// True when the images of every two of the pen's four LEDs (the labelled pen's model,
-    /// unlabelled LEDs included) are at least `min_image_separation_px` apart in both cameras.
-    pub(super) fn pen_images_separated(&self, pair: &PairView<'_>, pen: &TipEstimate) -> bool {
-        let Some(c) = pair.tip.pattern_centroid(pen.pattern) else {
-            return false;
-        };
+    /// True when every labelled LED's image lies far enough from the images of the pen's other
+    /// three LEDs (the labelled pen's model, unlabelled LEDs included) in both cameras that the
+    /// spots cannot have merged into one blob ([`Self::merged_leds`] finds none).
+    pub(super) fn pen_images_separated(
+        &self,
+        pair: &PairView<'_>,
+        pen: &TipEstimate,
+        id: &Identification,
+    ) -> bool {
+        self.merged_leds(pair, pen, id)
+            .is_some_and(|m| m.iter().all(|&merged| !merged))
+    }
+
+    /// The labelled LEDs whose image, in either camera, lies within reach of another LED's image
+    /// (labelled or not, from the labelled pen's model): closer than `min_image_separation_px`,
+    /// or than [`MERGE_MARGIN`] times twice the largest labelled blob radius of that camera. Two
+    /// bright spots whose thresholded discs touch are detected as one blob half-way between
+    /// them, which would be labelled as one of the two LEDs. None when the pen model is unknown.
+    pub(super) fn merged_leds(
+        &self,
+        pair: &PairView<'_>,
+        pen: &TipEstimate,
+        id: &Identification,
+    ) -> Option<[bool; LED_COUNT]> {
+        let c = pair.tip.pattern_centroid(pen.pattern)?;
         let leds = self
             .led_offsets
             .map(|l| pen.centroid + pen.direction * (c - l));
-        let min2 = self.min_image_separation_px.powi(2);
-        [CameraId::Left, CameraId::Right].iter().all(|&camera| {
-            let px: Vec<[f64; 2]> = leds
-                .iter()
-                .filter_map(|p| pair.rig.project(camera, p).ok())
-                .collect();
-            px.iter().enumerate().all(|(i, a)| {
-                px[i + 1..]
+        let mut merged = [false; LED_COUNT];
+        for camera in [CameraId::Left, CameraId::Right] {
+            let cam = usize::from(camera == CameraId::Right);
+            let largest = pair.align.current(cam).map_or(0.0, |frame| {
+                id.assignment
                     .iter()
-                    .all(|b| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) >= min2)
-            })
-        })
+                    .flatten()
+                    .filter_map(|&k| pair.candidates.get(k))
+                    .map(|k| if cam == 0 { k.left } else { k.right })
+                    .filter_map(|b| frame.radii.get(b).copied())
+                    .fold(0.0, f64::max)
+            });
+            let min = self
+                .min_image_separation_px
+                .max(MERGE_MARGIN * 2.0 * largest);
+            let px: Vec<Option<[f64; 2]>> = leds
+                .iter()
+                .map(|p| pair.rig.project(camera, p).ok())
+                .collect();
+            for (k, flag) in merged.iter_mut().enumerate() {
+                if id.assignment[k].is_none() {
+                    continue;
+                }
+                let Some(a) = px[k] else {
+                    *flag = true;
+                    continue;
+                };
+                let near = px.iter().enumerate().any(|(j, b)| {
+                    j != k && b.is_some_and(|b| (a[0] - b[0]).hypot(a[1] - b[1]) < min)
+                });
+                *flag |= near;
+            }
+        }
+        Some(merged)
     }
 
     /// True when the predicted LED images (constant-velocity pen motion) put every labelled blob
@@ -283,7 +329,7 @@ mod tests {
                     .iter()
                     .map(|p| rig.project(camera, p).unwrap())
                     .collect();
-                align.push(cam, 1_000, blobs);
+                align.push(cam, 1_000, blobs, Vec::new());
             }
             let mut points = PairPoints::default();
             align.prepare(&rig, 1, 1_000, &mut points);
@@ -323,11 +369,45 @@ mod tests {
     fn overlapping_led_images_are_unsafe() {
         let guard = LabelGuard::new(&TrackerConfig::default());
         let across = Scene::new(pen(Vector3::new(0.05, 0.0, 0.7), Vector3::x()));
-        assert!(guard.pen_images_separated(&across.view(), &across.estimate()));
+        assert!(guard.pen_images_separated(&across.view(), &across.estimate(), &labelled(4)));
         assert!(guard.is_safe(&across.view(), &labelled(4), &across.estimate(), true));
         let dir = Vector3::new(0.01, 0.0, -1.0).normalize();
         let at_camera = Scene::new(pen(Vector3::new(0.0, 0.0, 0.6), dir));
-        assert!(!guard.pen_images_separated(&at_camera.view(), &at_camera.estimate()));
+        assert!(!guard.pen_images_separated(
+            &at_camera.view(),
+            &at_camera.estimate(),
+            &labelled(4)
+        ));
+    }
+
+    /// LED images closer than their blobs' discs (plus the margin) could be one merged blob: with
+    /// blob radii just under half the closest LED images' distance over the margin the labelling
+    /// is safe, just over it is not.
+    #[test]
+    fn led_images_within_their_blobs_reach_are_unsafe() {
+        let guard = LabelGuard::new(&TrackerConfig::default());
+        let mut s = Scene::new(pen(Vector3::new(0.05, 0.0, 0.7), Vector3::x()));
+        let closest = (0..2)
+            .map(|cam| {
+                let b = &s.align.current(cam).unwrap().blobs;
+                (0..LED_COUNT - 1)
+                    .map(|i| (b[i][0] - b[i + 1][0]).hypot(b[i][1] - b[i + 1][1]))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(f64::INFINITY, f64::min);
+        let reach = closest / (2.0 * MERGE_MARGIN);
+        for (factor, safe) in [(0.95, true), (1.05, false)] {
+            for cam in 0..2 {
+                let blobs = s.align.current(cam).unwrap().blobs.clone();
+                let radii = vec![reach * factor; blobs.len()];
+                s.align.push(cam, 1_000, blobs, radii);
+            }
+            assert_eq!(
+                guard.pen_images_separated(&s.view(), &s.estimate(), &labelled(4)),
+                safe,
+                "radius {factor} x reach"
+            );
+        }
     }
 
     /// A stray blob next to a labelled one makes the labelling unsafe.
@@ -339,8 +419,8 @@ mod tests {
         let mut blobs = s.align.current(0).unwrap().blobs.clone();
         blobs.push([blobs[2][0] + 2.0, blobs[2][1] + 1.0]);
         let right = s.align.current(1).unwrap().blobs.clone();
-        s.align.push(0, 1_000, blobs);
-        s.align.push(1, 1_000, right);
+        s.align.push(0, 1_000, blobs, Vec::new());
+        s.align.push(1, 1_000, right, Vec::new());
         assert!(!guard.labelled_blobs_isolated(&s.view(), &labelled(4)));
         assert!(
             guard.labelled_blobs_isolated(&s.view(), &labelled(2)),

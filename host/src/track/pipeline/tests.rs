@@ -97,11 +97,7 @@ fn simulate_clock(
             } else {
                 t
             };
-            tracker.push_frame(CameraFrame {
-                camera: cam,
-                t_ns,
-                blobs,
-            })
+            tracker.push_frame(CameraFrame::new(cam, t_ns, blobs))
         };
         let Some(s) = out else { continue };
         stats.samples += 1;
@@ -414,11 +410,7 @@ fn predicted_window_covers_the_next_blobs() {
     let frame = |t: u64, cam: CameraId, rng: &mut SplitMix64| {
         let proj = project_leds(&rig, &pen, &motion.pose(t as f64 * 1e-9), 0.0, rng);
         let c = usize::from(cam == CameraId::Right);
-        CameraFrame {
-            camera: cam,
-            t_ns: t,
-            blobs: proj[c].iter().flatten().copied().collect(),
-        }
+        CameraFrame::new(cam, t, proj[c].iter().flatten().copied().collect())
     };
     assert!(tracker.predicted_window(CameraId::Left, 0, 20.0).is_none());
     tracker.push_frame(frame(1_000_000, CameraId::Left, &mut rng));
@@ -458,7 +450,7 @@ proptest::proptest! {
             if k % 7 == 3 {
                 blobs.push([f64::NAN, 1.0]);
             }
-            outputs.extend(tracker.push_frame(CameraFrame { camera, t_ns: t, blobs }));
+            outputs.extend(tracker.push_frame(CameraFrame::new(camera, t, blobs)));
             if let Some(&(ti, a, g)) = imu.get(k) {
                 let s = ImuSample { t_ns: ti, accel: [a, 9.8, -a], gyro: [g, -g, 0.1], mag: [30.0, a, 5.0] };
                 outputs.extend(tracker.push_imu(&s));
@@ -539,11 +531,7 @@ fn a_pen_pointing_at_a_camera_gives_no_labels() {
         let t = k * 16_666_667;
         for (i, camera) in [CameraId::Left, CameraId::Right].into_iter().enumerate() {
             let blobs = proj[i].iter().flatten().copied().collect();
-            let out = tracker.push_frame(CameraFrame {
-                camera,
-                t_ns: t + i as u64 * 1_000_000,
-                blobs,
-            });
+            let out = tracker.push_frame(CameraFrame::new(camera, t + i as u64 * 1_000_000, blobs));
             if out.is_some_and(|s| s.labels.iter().any(Option::is_some)) {
                 labelled += 1;
             }
