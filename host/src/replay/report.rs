@@ -90,21 +90,6 @@ pub fn label_errors(out: &ReplayOutput, truth: &[ExposureTruth]) -> (usize, usiz
             checked += 1;
             if !(ok_l && ok_r) {
                 wrong += 1;
-                if std::env::var_os("FIRES_DEBUG_LABELS").is_some() {
-                    let tl = by_frame.get(&(0, lp.left_frame)).map(|t| {
-                        t.leds
-                            .iter()
-                            .map(|l| (l.pixel, l.visibility))
-                            .collect::<Vec<_>>()
-                    });
-                    let tr = by_frame.get(&(1, lp.right_frame)).map(|t| {
-                        t.leds
-                            .iter()
-                            .map(|l| (l.pixel, l.visibility))
-                            .collect::<Vec<_>>()
-                    });
-                    eprintln!("MISLABEL led {led} frames {} {} l {l:?} r {r:?} ok {ok_l} {ok_r}\n  truthL {tl:?}\n  truthR {tr:?}\n  all {:?}", lp.left_frame, lp.right_frame, lp.px);
-                }
             }
         }
     }

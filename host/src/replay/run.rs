@@ -256,13 +256,6 @@ pub fn replay(
                             right_frame: *r,
                             refusal: session.tracker().last_refusal(),
                         });
-                        if std::env::var_os("FIRES_DEBUG_PAIRS").is_some() {
-                            eprintln!(
-                                "PAIR {} {:?}",
-                                s.track.t_ns,
-                                session.tracker().last_refusal()
-                            );
-                        }
                     }
                     samples.push(s.track);
                     display_tips.push(s.display_tip);

@@ -555,6 +555,64 @@ mod tests {
         assert!(points.aligned_velocity.iter().all(Option::is_none));
     }
 
+    /// With a rolling shutter every blob was exposed at its own row's time: the frame's time is its
+    /// blobs' median row's, and every blob, the pair's own camera's too, is moved to the pair's time
+    /// with the velocity measured between its own exposure times, exactly for a constant velocity.
+    #[test]
+    fn rolling_shutter_blobs_move_from_their_rows_times() {
+        let rig = rig();
+        let row = 20_000.0; // ns per row: a 15 ms readout over 750 rows
+        let mut a = TimeAlignment::new(AlignOptions {
+            row_time_ns: [row, row],
+            ..OPTIONS
+        });
+        let v = [2.0e-7, 1.5e-7]; // pixels per nanosecond
+        let start = [[400.0, 100.0], [430.0, 300.0], [450.0, 500.0]];
+        let at = |s: f64| -> Vec<[f64; 2]> {
+            start
+                .iter()
+                .map(|b| [b[0] + v[0] * s, b[1] + v[1] * s])
+                .collect()
+        };
+        // The blobs of a frame whose first row is exposed at `t0`: each where it is when its row
+        // is exposed (y = y0 + v_y (t0 + row y)).
+        let frame = |t0: f64| -> Vec<[f64; 2]> {
+            start
+                .iter()
+                .map(|b| {
+                    let y = (b[1] + v[1] * t0) / (1.0 - v[1] * row);
+                    [b[0] + v[0] * (t0 + row * y), y]
+                })
+                .collect()
+        };
+        let t1 = a.push(1, 10_000_000, frame(10e6), Vec::new());
+        let median = frame(10e6)[1][1];
+        assert_eq!(t1, 10_000_000 + (row * median).round() as u64);
+        a.label(1, [Some(0), Some(1), None, Some(2)], [None; LED_COUNT]);
+        let t2 = a.push(1, 26_000_000, frame(26e6), Vec::new());
+        a.label(1, [Some(0), Some(1), None, Some(2)], [None; LED_COUNT]);
+        // The other camera's blobs at a later pair time.
+        let moved = a.alignment(&rig, 1, 33_000_000);
+        let want = at(33e6);
+        assert_eq!(moved.len(), 3);
+        for (i, p, _) in moved {
+            assert!((p[0] - want[i][0]).hypot(p[1] - want[i][1]) < 1e-6, "{i}");
+        }
+        // The pair's own camera: every blob at the frame's (median row) time.
+        let mut points = PairPoints::default();
+        a.prepare(&rig, 1, t2, &mut points);
+        let want = at(t2 as f64);
+        for (i, p) in points.pixels(CameraId::Right).iter().enumerate() {
+            assert!((p[0] - want[i][0]).hypot(p[1] - want[i][1]) < 1e-6, "{i}");
+        }
+        // A global shutter leaves the own frame's blobs where they were imaged.
+        let mut g = TimeAlignment::new(OPTIONS);
+        g.push(1, 10_000_000, frame(10e6), Vec::new());
+        assert_eq!(g.push(1, 26_000_000, frame(26e6), Vec::new()), 26_000_000);
+        g.prepare(&rig, 1, 26_000_000, &mut points);
+        assert_eq!(points.pixels(CameraId::Right), frame(26e6).as_slice());
+    }
+
     /// Without labels or a pose (the pen just reappeared) the blobs of consecutive frames are
     /// matched along the pen line, in any blob order, and moved with their measured velocity.
     #[test]
