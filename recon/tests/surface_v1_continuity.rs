@@ -15,7 +15,7 @@
 mod common;
 mod surface_common;
 
-use common::netgen::{network_from_polygons, parametric_network};
+use common::netgen::{network_from_polygons, parametric_network, MeshDistance};
 use fires_recon::geometry::Vec3;
 use fires_recon::mesh::{Edge, Face, Halfedge, SurfaceMesh};
 use fires_recon::network::Network;
@@ -212,8 +212,8 @@ fn evaluate(ctrl: &ControlMesh) -> ControlMesh {
 }
 
 /// Figures of one V1 surface: the jumps across non-sharp drawn curves and across all other interior edges
-/// at the final level and on the finer evaluation, the jump across sharp curves there, and the RMS
-/// distance of the curve vertices from their curve points at the final level.
+/// at the final level and on the finer evaluation, the jump across sharp curves there, and curve_rms
+/// (compare.rs) at the final level.
 struct Continuity {
     final_on: f64,
     eval_on: f64,
@@ -236,22 +236,29 @@ fn continuity(name: &str, refined: &ControlMesh, opts: &V1Options) -> Continuity
     let (eval_on, _) = normal_jump(&fine, |e| on_drawn_curve(&fine, e, false));
     let (eval_off, _) = normal_jump(&fine, |e| fine.span(e).is_none());
     let (eval_sharp, n_sharp) = normal_jump(&fine, |e| on_drawn_curve(&fine, e, true));
-    let (mut curve_dev, mut sum, mut n) = (0.0f64, 0.0, 0usize);
+    // The largest distance of a curve vertex from its curve point, and curve_rms (compare.rs): the RMS
+    // distance from the drawn curves' points to the surface.
+    let mut curve_dev = 0.0f64;
     for v in s.mesh.vertices() {
         if let VertexTag::OnCurve(p) = s.tag(v) {
             if !s.curves[p.curve].generated {
                 let d = (s.mesh.position(v) - s.curves[p.curve].point_at(p.t)).norm();
                 curve_dev = curve_dev.max(d);
-                sum += d * d;
-                n += 1;
             }
         }
     }
-    let curve_rms = (sum / n.max(1) as f64).sqrt();
+    let to_surface = MeshDistance::new(&s.mesh);
+    let d: Vec<f64> = s
+        .curves
+        .iter()
+        .filter(|c| !c.generated)
+        .flat_map(|c| c.points.iter().map(|&p| to_surface.distance(p)))
+        .collect();
+    let curve_rms = (d.iter().map(|x| x * x).sum::<f64>() / d.len().max(1) as f64).sqrt();
     eprintln!(
         "{name}: final level {} v: jump across curves {final_on:.3}° (over {n_on}), elsewhere {final_off:.3}°; \
          evaluated {} v: across curves {eval_on:.3}°, elsewhere {eval_off:.3}°, across sharp curves \
-         {eval_sharp:.3}° (over {n_sharp}); curve vertices within {:.4} mm (RMS {:.4} mm)",
+         {eval_sharp:.3}° (over {n_sharp}); curve vertices within {:.4} mm of their curve points, curve_rms {:.4} mm",
         s.mesh.n_vertices(),
         fine.mesh.n_vertices(),
         curve_dev * 1e3,
