@@ -332,6 +332,14 @@ fn spread_fit(
         *n = n.normalize_or_zero();
     }
     let free: Vec<Vertex> = m.vertices().filter(|v| !pinned[v.idx()]).collect();
+    // The free vertices' neighbours, gathered once for the sweeps.
+    let mut start = Vec::with_capacity(free.len() + 1);
+    let mut nbr: Vec<usize> = Vec::new();
+    for &v in &free {
+        start.push(nbr.len());
+        nbr.extend(m.vertex_vertices(v).map(|w| w.idx()));
+    }
+    start.push(nbr.len());
     let mut d = vec![Vec3::ZERO; p0.len()];
     let mut s = vec![0.0f64; p0.len()];
     let mut p = p0.to_vec();
@@ -343,14 +351,10 @@ fn spread_fit(
             }
         }
         for _ in 0..sweeps {
-            for &v in &free {
-                let (mut sum, mut k) = (0.0, 0usize);
-                for w in m.vertex_vertices(v) {
-                    sum += s[w.idx()];
-                    k += 1;
-                }
-                if k > 0 {
-                    s[v.idx()] = sum / k as f64;
+            for (i, &v) in free.iter().enumerate() {
+                let ns = &nbr[start[i]..start[i + 1]];
+                if !ns.is_empty() {
+                    s[v.idx()] = ns.iter().map(|&w| s[w]).sum::<f64>() / ns.len() as f64;
                 }
             }
         }
