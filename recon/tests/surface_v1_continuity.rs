@@ -293,33 +293,30 @@ fn v1_normals_agree_within_a_degree_across_smooth_curves() {
         ),
         ("torus 8x6", refined_v1(&torus_network(), &opts).unwrap()),
     ];
-    for (name, refined) in &shapes {
+    for (k, (name, refined)) in shapes.iter().enumerate() {
         let c = continuity(name, refined, &opts);
         assert!(c.n_on > 100, "{name}: {} curve edges measured", c.n_on);
         assert!(c.eval_on <= 1.0, "{name}: {}° across the curves", c.eval_on);
         assert!(c.eval_off <= 1.0, "{name}: {}° elsewhere", c.eval_off);
-        assert!(
-            c.curve_rms <= 1e-4,
-            "{name}: curve vertices {} m off (RMS)",
-            c.curve_rms
-        );
-    }
-    // Where the default final level's faces resolve the measure (the bump grid, the torus), it holds there
-    // too; on the 8-face sphere the final faces are too coarse even away from the curves.
-    for (name, refined) in &shapes[1..] {
-        let c = continuity(name, refined, &opts);
-        assert!(
-            c.final_on <= 1.0,
-            "{name}: {}° at the final level",
-            c.final_on
-        );
+        assert!(c.curve_rms <= 1e-4, "{name}: curve_rms {} m", c.curve_rms);
+        // Where the default final level's faces resolve the measure (the bump grid, the torus), it holds
+        // there too; on the 8-face sphere the final faces are too coarse even away from the curves.
+        if k > 0 {
+            assert!(
+                c.final_on <= 1.0,
+                "{name}: {}° at the final level",
+                c.final_on
+            );
+        }
     }
 }
 
 #[test]
 fn the_measure_sees_sharp_curves_and_a_two_degree_fold() {
     let opts = V1Options::default();
-    // A sharp curve across the bump grid keeps a crease; the smooth curves stay smooth.
+    // A sharp line across the bump grid keeps a crease: the angle at which the Coons patches of its two
+    // sides meet (4.0°; the true surface is smooth there). Within a face of the crease the measure's
+    // faces straddle it, so the smooth curves next to it are not judged here.
     let c = continuity(
         "bumpy grid, line x = 0.08 m sharp",
         &refined_v1(&bumpy_network(true), &opts).unwrap(),
