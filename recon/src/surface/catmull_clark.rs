@@ -34,6 +34,11 @@
 //!   [`smooth_point_at`]), then the plain rules apply; finish with
 //!   [`limit_positions`]. The surface stays C1 across non-sharp curves and passes through the curve vertices
 //!   of every level (same sphere: 0.04°; a bumpy height-field grid 0.13°).
+//!   With [`CatmullClarkOptions::limit_fit_spread`] the fit first moves the free vertices too, along their
+//!   normals by the harmonic extension of the curve vertices' normal corrections (FIRESV1's choice, v1.rs):
+//!   where the whole control net lies on the surface (an interpolatory level before), moving the curve
+//!   vertices alone lifts them out of it, and the limit surface gets a narrow ridge along every curve (C1,
+//!   but bent within a face or two of the curve).
 //! * [`CurveKeeping::None`]: the plain rules.
 
 use super::control::{ControlMesh, CurvePoint, CurveSpan, VertexTag};
@@ -63,6 +68,10 @@ pub struct CatmullClarkOptions {
     pub boundary_is_crease: bool,
     /// Gauss-Seidel sweeps of the limit fit of [`CurveKeeping::Limit`] (default 8).
     pub limit_fit_sweeps: usize,
+    /// Spread the limit fit's correction over the free vertices ([`CurveKeeping::Limit`]; module docs):
+    /// Gauss-Seidel sweeps of the harmonic extension of its normal part per fit sweep (default 0: only the
+    /// curve vertices move).
+    pub limit_fit_spread: usize,
 }
 
 impl Default for CatmullClarkOptions {
@@ -71,6 +80,7 @@ impl Default for CatmullClarkOptions {
             keep: CurveKeeping::Snap,
             boundary_is_crease: true,
             limit_fit_sweeps: 8,
+            limit_fit_spread: 0,
         }
     }
 }
@@ -272,14 +282,90 @@ fn limit_of(m: &SurfaceMesh, cls: &Classes, v: Vertex, p: &[Vec3]) -> Option<Vec
 }
 
 /// Moves the curve vertices so their limit positions are their curve targets ([`CurveKeeping::Limit`]).
-fn fit_limit(c: &ControlMesh, cls: &Classes, sweeps: usize) -> Vec<Vec3> {
+fn fit_limit(c: &ControlMesh, cls: &Classes, sweeps: usize, spread: usize) -> Vec<Vec3> {
     let m = &c.mesh;
     let targets: Vec<(Vertex, Vec3)> = m
         .vertices()
         .filter(|&v| cls.rule[v.idx()] != Rule::Fixed)
         .filter_map(|v| smooth_curve_target(c, v).map(|t| (v, t)))
         .collect();
-    gauss_seidel(m, cls, m.positions().to_vec(), &targets, sweeps)
+    let p = if spread > 0 {
+        spread_fit(m, cls, &targets, sweeps, spread)
+    } else {
+        m.positions().to_vec()
+    };
+    gauss_seidel(m, cls, p, &targets, sweeps)
+}
+
+/// The limit fit with its correction spread over the free vertices: the curve vertices take their limit
+/// residuals (accumulated over `outer` rounds), and the free vertices move along their normals by the
+/// harmonic extension of the curve vertices' normal corrections (zero at fixed vertices; `sweeps`
+/// Gauss-Seidel sweeps of the uniform Laplacian per round, warm-started), so that a face's interior moves
+/// with its curves instead of leaving a ridge of moved curve vertices. Only the normal part is spread: the
+/// tangential part only slides a curve vertex along the surface, and averaged over a curved face it
+/// would move the interior off it.
+fn spread_fit(
+    m: &SurfaceMesh,
+    cls: &Classes,
+    targets: &[(Vertex, Vec3)],
+    outer: usize,
+    sweeps: usize,
+) -> Vec<Vec3> {
+    let p0 = m.positions();
+    let mut pinned: Vec<bool> = cls.rule.iter().map(|&r| r == Rule::Fixed).collect();
+    for &(v, _) in targets {
+        pinned[v.idx()] = true;
+    }
+    // Vertex normals: the sum of the incident faces' (Newell) normals.
+    let mut normal = vec![Vec3::ZERO; p0.len()];
+    for f in m.faces() {
+        let vs: Vec<Vertex> = m.face_vertices(f).collect();
+        let mut n = Vec3::ZERO;
+        for (k, &v) in vs.iter().enumerate() {
+            n += p0[v.idx()].cross(p0[vs[(k + 1) % vs.len()].idx()]);
+        }
+        for v in vs {
+            normal[v.idx()] += n;
+        }
+    }
+    for n in &mut normal {
+        *n = n.normalize_or_zero();
+    }
+    let free: Vec<Vertex> = m.vertices().filter(|v| !pinned[v.idx()]).collect();
+    // The free vertices' neighbours, gathered once for the sweeps.
+    let mut start = Vec::with_capacity(free.len() + 1);
+    let mut nbr: Vec<usize> = Vec::new();
+    for &v in &free {
+        start.push(nbr.len());
+        nbr.extend(m.vertex_vertices(v).map(|w| w.idx()));
+    }
+    start.push(nbr.len());
+    let mut d = vec![Vec3::ZERO; p0.len()];
+    let mut s = vec![0.0f64; p0.len()];
+    let mut p = p0.to_vec();
+    for _ in 0..outer {
+        for &(v, t) in targets {
+            if let Some((l, _)) = limit_stencil(m, cls, v, &p) {
+                d[v.idx()] += t - l;
+                s[v.idx()] = d[v.idx()].dot(normal[v.idx()]);
+            }
+        }
+        for _ in 0..sweeps {
+            for (i, &v) in free.iter().enumerate() {
+                let ns = &nbr[start[i]..start[i + 1]];
+                if !ns.is_empty() {
+                    s[v.idx()] = ns.iter().map(|&w| s[w]).sum::<f64>() / ns.len() as f64;
+                }
+            }
+        }
+        for &(v, _) in targets {
+            p[v.idx()] = p0[v.idx()] + d[v.idx()];
+        }
+        for &v in &free {
+            p[v.idx()] = p0[v.idx()] + normal[v.idx()] * s[v.idx()];
+        }
+    }
+    p
 }
 
 /// Gauss-Seidel on the limit stencils: each sweep moves every target vertex so its limit is its target.
@@ -333,7 +419,7 @@ pub fn catmull_clark(
     let m = &c.mesh;
     let cls = classify(c, opts.boundary_is_crease);
     let p: Vec<Vec3> = if opts.keep == CurveKeeping::Limit {
-        fit_limit(c, &cls, opts.limit_fit_sweeps)
+        fit_limit(c, &cls, opts.limit_fit_sweeps, opts.limit_fit_spread)
     } else {
         m.positions().to_vec()
     };

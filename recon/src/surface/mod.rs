@@ -49,5 +49,7 @@ pub use quad_cotan::{vertex_normals_at, QuadCotan};
 pub use refine::{refine, refine_step, RefineOptions};
 pub use tessellate::{tessellate, tessellate_step, TessellateOptions};
 pub use triquad::{triquadrify, TriquadOptions};
-pub use v1::{reconstruct_v1, refined_v1, subdivide_v1, without_generated, V1Options};
+pub use v1::{
+    reconstruct_v1, refined_v1, subdivide_v1, subdivide_v1_control, without_generated, V1Options,
+};
 pub use v2::{reconstruct_v2, reconstruct_v2_from_base, subdivide, v2_refined, V2Options};
