@@ -13,8 +13,9 @@ use fires_host::capture::SourceOpener;
 use fires_host::clock::HostClock;
 use fires_host::link::SerialConfig;
 use fires_host::live::{run_live, LiveConfig, LiveOutput, DEFAULT_REORDER_NS};
+use fires_host::replay::run::tip_axis_for;
 use fires_host::replay::ReplayConfig;
-use fires_record::RigCalibration;
+use fires_record::{FrameContent, RigCalibration};
 
 use crate::output::{write_json, write_strokes, write_track_csv};
 
@@ -118,6 +119,8 @@ pub fn run(args: &TrackArgs) -> anyhow::Result<()> {
             .context("cannot install the Ctrl-C handler")?;
     }
     let mut replay = ReplayConfig::default();
+    // Live cameras are webcams: the tip's axis as for a recording of image cameras.
+    replay.tracker.direction_source = tip_axis_for(FrameContent::Images);
     replay.tracker.world = args
         .world
         .as_deref()

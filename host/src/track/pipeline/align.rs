@@ -203,9 +203,18 @@ impl TimeAlignment {
         self.cameras[1 - this].label_current(other);
     }
 
-    /// Keeps a vision pose (all four LED positions at `t_ns`) for predicting the LED images.
+    /// Keeps a vision pose (all four LED positions at `t_ns`) for predicting the LED images. The
+    /// older pose, which with the newest gives the velocity, is kept at least
+    /// [`MIN_VELOCITY_BASELINE_NS`] older: two free-running cameras drift into phase, and two
+    /// poses from nearly simultaneous frames would divide their noise by microseconds.
     pub(super) fn remember_pose(&mut self, t_ns: u64, leds: [Vector3<f64>; LED_COUNT]) {
-        self.pen_history = [Some((t_ns, leds)), self.pen_history[0]];
+        let older = match self.pen_history[0] {
+            Some((t0, _)) if t_ns.saturating_sub(t0) >= MIN_VELOCITY_BASELINE_NS => {
+                self.pen_history[0]
+            }
+            _ => self.pen_history[1],
+        };
+        self.pen_history = [Some((t_ns, leds)), older];
     }
 
     /// Fills `points` for the newest frame of `this` at `t`: the other camera's latest frame
@@ -398,6 +407,11 @@ impl TimeAlignment {
     }
 }
 
+/// The shortest time between the two vision poses whose difference predicts the pen's motion,
+/// nanoseconds: a quarter of a 60 Hz frame, so that a millimetre of triangulation noise makes at
+/// most 0.25 m/s of velocity error.
+const MIN_VELOCITY_BASELINE_NS: u64 = 4_000_000;
+
 /// The time step over which a predicted pen motion gives an image velocity when the blobs' frame
 /// is the pair's own (a rolling shutter's rows still need moving), nanoseconds.
 const PREDICTION_STEP_NS: f64 = 10_000_000.0;
@@ -467,6 +481,26 @@ mod tests {
         assert!(a
             .predicted_leds(110_000_000 + OPTIONS.continuity_ns + 1)
             .is_none());
+    }
+
+    /// Two poses from nearly simultaneous frames (free-running cameras drift into phase) do not
+    /// make the velocity: the pose before them does, so a millimetre of noise between them
+    /// predicts nothing absurd.
+    #[test]
+    fn poses_microseconds_apart_keep_the_older_velocity_baseline() {
+        let mut a = TimeAlignment::new(OPTIONS);
+        let v = Vector3::new(0.1, 0.0, 0.0);
+        let p0 = Vector3::new(0.0, 0.0, 0.8);
+        a.remember_pose(100_000_000, pen_at(p0));
+        a.remember_pose(116_000_000, pen_at(p0 + v * 0.016));
+        // 20 us later, 1 mm off by noise: as a velocity baseline this would be 50 m/s.
+        let noisy = p0 + v * 0.01602 + Vector3::new(0.0, 0.001, 0.0);
+        a.remember_pose(116_020_000, pen_at(noisy));
+        let p = a.predicted_leds(132_000_000).unwrap();
+        // The velocity comes from the pose 16 ms older: 1 mm over 16 ms, 1 mm more in 16 ms.
+        let want = noisy + (noisy - p0) / 0.01602 * 0.01598;
+        assert!((p[0] - want).norm() < 1e-9, "{:?} vs {want:?}", p[0]);
+        assert!((p[0] - (p0 + v * 0.032)).norm() < 0.0025);
     }
 
     /// A labelled frame keeps its labels; an unlabelled one takes the blob at each predicted LED
