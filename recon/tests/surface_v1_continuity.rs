@@ -24,7 +24,7 @@ use fires_recon::surface::{
     triquadrify, CatmullClarkOptions, ControlMesh, CurveKeeping, V1Options, VertexTag,
 };
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
-use surface_common::{control, face_normal, CurveSpec};
+use surface_common::{control, face_normal, folded_sheet, CurveSpec};
 
 /// Catmull-Clark levels by which [`evaluate`] samples V1's surface more finely than its final level.
 const EVAL_LEVELS: usize = 2;
@@ -119,48 +119,6 @@ fn torus_network() -> Network {
         [rho * a.cos(), rho * a.sin(), r * b.sin()]
     };
     parametric_network(&torus, 8, 6, (true, true), 16)
-}
-
-/// Two quads folded along the sharp curve y = 1: z = a·|y − 1| over [0, 3] × [0, 2] (surface_v2.rs), the
-/// other curves bowed in their half's plane.
-fn folded_sheet(a: f64) -> ControlMesh {
-    let p = move |x: f64, y: f64| Vec3::new(x, y, a * (y - 1.0).abs());
-    let pts = vec![
-        p(0., 0.),
-        p(3., 0.),
-        p(0., 1.),
-        p(3., 1.),
-        p(0., 2.),
-        p(3., 2.),
-    ];
-    let faces = vec![vec![0, 1, 3, 2], vec![2, 3, 5, 4]];
-    let curve = |i: usize, j: usize, sharp: bool| {
-        let (pa, pb) = (pts[i], pts[j]);
-        CurveSpec {
-            chain: vec![i, j],
-            seg: Box::new(move |_, s| {
-                let q = pa * (1.0 - s) + pb * s;
-                let bow = if pa.x == pb.x {
-                    0.2 * (PI * s).sin()
-                } else {
-                    0.0
-                };
-                Vec3::new(q.x + bow, q.y, q.z)
-            }),
-            samples: 32,
-            sharp,
-        }
-    };
-    let specs = vec![
-        curve(0, 1, false),
-        curve(4, 5, false),
-        curve(2, 3, true),
-        curve(0, 2, false),
-        curve(2, 4, false),
-        curve(1, 3, false),
-        curve(3, 5, false),
-    ];
-    control(&pts, &faces, specs)
 }
 
 /// Whether `e` follows a drawn (not generated) curve whose crease flag is `sharp`.

@@ -16,7 +16,7 @@ use fires_recon::surface::{
     base_mesh, reconstruct_v2, reconstruct_v2_from_base, surface_diffusion, tessellate, v2_refined,
     ControlMesh, CurvatureField, DiffusionOptions, TessellateOptions, V2Options, VertexTag,
 };
-use surface_common::{control, cube, face_normal, face_planarity, CurveSpec};
+use surface_common::{control, cube, face_normal, face_planarity, folded_sheet, CurveSpec};
 
 /// The octahedron network of three orthogonal great circles of radius `r`: 6 vertices, 12 quarter arcs
 /// (sampled 64 times each), 8 triangular faces.
@@ -585,44 +585,7 @@ fn a_folded_sheet_keeps_its_sharp_fold_and_flat_halves() {
     // Two quads, z = a·|y − 1| over [0, 3] × [0, 2], the fold y = 1 a sharp curve, the boundary smooth.
     let a = 0.5;
     let z = move |y: f64| a * (y - 1.0).abs();
-    let p = move |x: f64, y: f64| Vec3::new(x, y, z(y));
-    let pts = vec![
-        p(0., 0.),
-        p(3., 0.),
-        p(0., 1.),
-        p(3., 1.),
-        p(0., 2.),
-        p(3., 2.),
-    ];
-    let faces = vec![vec![0, 1, 3, 2], vec![2, 3, 5, 4]];
-    let straight = |i: usize, j: usize, sharp: bool| {
-        let (pa, pb) = (pts[i], pts[j]);
-        CurveSpec {
-            chain: vec![i, j],
-            // Bowed inside the plane of its half (x only), so the patches are not trivially flat.
-            seg: Box::new(move |_, s| {
-                let q = pa * (1.0 - s) + pb * s;
-                let bow = if pa.x == pb.x {
-                    0.2 * (PI * s).sin()
-                } else {
-                    0.0
-                };
-                Vec3::new(q.x + bow, q.y, q.z)
-            }),
-            samples: 32,
-            sharp,
-        }
-    };
-    let specs = vec![
-        straight(0, 1, false),
-        straight(4, 5, false),
-        straight(2, 3, true),
-        straight(0, 2, false),
-        straight(2, 4, false),
-        straight(1, 3, false),
-        straight(3, 5, false),
-    ];
-    let base = control(&pts, &faces, specs);
+    let base = folded_sheet(a);
     let c = reconstruct_v2_from_base(&base, &V2Options::default()).unwrap();
     let off = c
         .mesh

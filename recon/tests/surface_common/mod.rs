@@ -4,6 +4,7 @@
 use fires_recon::geometry::Vec3;
 use fires_recon::mesh::{SurfaceMesh, Vertex};
 use fires_recon::surface::{ControlMesh, Curve, CurvePoint, CurveSpan, VertexTag};
+use std::f64::consts::PI;
 
 /// One curve of a generated network: the chain of mesh vertices it runs through, the function sampling
 /// it between consecutive chain vertices (`seg(k, s)`, `s ∈ [0, 1]`, `k` the segment), samples per
@@ -134,4 +135,46 @@ pub fn face_normal(mesh: &SurfaceMesh, f: fires_recon::mesh::Face) -> Vec3 {
         n += pts[k].cross(pts[(k + 1) % pts.len()]);
     }
     n.normalize_or_zero()
+}
+
+/// Two quads folded along the sharp curve y = 1: z = a·|y − 1| over [0, 3] × [0, 2], the other curves bowed
+/// in their half's plane (x only), so the patches are not trivially flat.
+pub fn folded_sheet(a: f64) -> ControlMesh {
+    let p = move |x: f64, y: f64| Vec3::new(x, y, a * (y - 1.0).abs());
+    let pts = vec![
+        p(0., 0.),
+        p(3., 0.),
+        p(0., 1.),
+        p(3., 1.),
+        p(0., 2.),
+        p(3., 2.),
+    ];
+    let faces = vec![vec![0, 1, 3, 2], vec![2, 3, 5, 4]];
+    let curve = |i: usize, j: usize, sharp: bool| {
+        let (pa, pb) = (pts[i], pts[j]);
+        CurveSpec {
+            chain: vec![i, j],
+            seg: Box::new(move |_, s| {
+                let q = pa * (1.0 - s) + pb * s;
+                let bow = if pa.x == pb.x {
+                    0.2 * (PI * s).sin()
+                } else {
+                    0.0
+                };
+                Vec3::new(q.x + bow, q.y, q.z)
+            }),
+            samples: 32,
+            sharp,
+        }
+    };
+    let specs = vec![
+        curve(0, 1, false),
+        curve(4, 5, false),
+        curve(2, 3, true),
+        curve(0, 2, false),
+        curve(2, 4, false),
+        curve(1, 3, false),
+        curve(3, 5, false),
+    ];
+    control(&pts, &faces, specs)
 }
