@@ -133,6 +133,33 @@ pub(crate) fn forward_supernodal_llt(
     Some(out)
 }
 
+/// Solves `L Lᵀ y = w` in place for `K` interleaved right-hand sides whose rows are already
+/// in the factor's (permuted) order: no gather or scatter. Returns `false`, leaving `w`
+/// untouched, if the factor is not supernodal or `w` has the wrong length.
+pub(crate) fn solve_supernodal_llt_permuted<const K: usize>(
+    symbolic: &SymbolicCholesky<usize>,
+    values: &[f64],
+    w: &mut [[f64; K]],
+) -> bool {
+    if w.len() != symbolic.nrows() {
+        return false;
+    }
+    let Some(nodes) = supernodes(symbolic, values) else {
+        return false;
+    };
+    forward_reach(&nodes, w);
+    backward(&nodes, w);
+    true
+}
+
+/// The forward substitution over the supernodes `w`'s nonzero rows reach.
+fn forward_reach<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
+    match reach(nodes, w) {
+        Some(visit) => forward_on(nodes, w, &visit),
+        None => forward(nodes, w),
+    }
+}
+
 fn solve_block<const K: usize>(
     nodes: &[Supernode<'_>],
     fwd: &[usize],
@@ -144,10 +171,7 @@ fn solve_block<const K: usize>(
         .iter()
         .map(|&f| std::array::from_fn(|c| rhs[(f, c)]))
         .collect();
-    match reach(nodes, &w) {
-        Some(visit) => forward_on(nodes, &mut w, &visit),
-        None => forward(nodes, &mut w),
-    }
+    forward_reach(nodes, &mut w);
     if let Some(b) = shared {
         for (k, r) in w.iter_mut().enumerate() {
             for (c, v) in r.iter_mut().enumerate() {
