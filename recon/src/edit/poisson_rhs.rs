@@ -123,6 +123,10 @@ impl PoissonRhs {
                 continue;
             };
             let s = f.map(|l| slot[l]);
+            if s.iter().all(|&v| v >= n_free) {
+                // Only constrained vertices: nothing reaches the reduced system.
+                continue;
+            }
             let g = hat_gradients(normal, f.map(|l| x[l]));
             let t = FaceTerm {
                 slots: [index(s[0])?, index(s[1])?, index(s[2])?],
