@@ -271,6 +271,7 @@ fn forward_node<const K: usize>(s: &Supernode<'_>, w: &mut [[f64; K]], tmp: &mut
 /// contribution column by column, then a dense triangular solve on the diagonal block.
 fn backward<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
     let mut tmp: Vec<[f64; K]> = Vec::new();
+    let mut below_dots: Vec<[f64; K]> = Vec::new();
     for s in nodes.iter().rev() {
         if s.width >= DENSE_WIDTH {
             backward_dense(s, w);
@@ -279,11 +280,19 @@ fn backward<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
         let rows = s.width + s.pattern.len();
         tmp.clear();
         tmp.extend(s.pattern.iter().map(|&r| w[r]));
+        // The below-diagonal products need only the gathered rows: all of them first, in
+        // ascending column order, so the supernode's values stream through memory once in
+        // address order; then the triangular solve on the diagonal block, in reverse.
+        below_dots.clear();
+        below_dots.extend(
+            s.values
+                .chunks_exact(rows)
+                .map(|col| dot4(&tmp, &col[s.width..])),
+        );
         for jj in (0..s.width).rev() {
-            let col = &s.values[jj * rows..(jj + 1) * rows];
-            let (block, below) = col.split_at(s.width);
+            let block = &s.values[jj * rows..jj * rows + s.width];
             let mut acc = w[s.start + jj];
-            let d = dot4(&tmp, below);
+            let d = below_dots[jj];
             for c in 0..K {
                 acc[c] -= d[c];
             }
