@@ -167,10 +167,12 @@ fn solve_block<const K: usize>(
     mut rhs: MatMut<'_, f64>,
     shared: Option<MatRef<'_, f64>>,
 ) {
-    let mut w: Vec<[f64; K]> = fwd
-        .iter()
-        .map(|&f| std::array::from_fn(|c| rhs[(f, c)]))
-        .collect();
+    // Gather and scatter read `rhs` and `w` in order and write through the permutation
+    // (independent stores instead of dependent random loads).
+    let mut w: Vec<[f64; K]> = vec![[0.0; K]; fwd.len()];
+    for (i, &p) in inv.iter().enumerate() {
+        w[p] = std::array::from_fn(|c| rhs[(i, c)]);
+    }
     forward_reach(nodes, &mut w);
     if let Some(b) = shared {
         for (k, r) in w.iter_mut().enumerate() {
@@ -180,9 +182,9 @@ fn solve_block<const K: usize>(
         }
     }
     backward(nodes, &mut w);
-    for (i, &p) in inv.iter().enumerate() {
+    for (r, &f) in w.iter().zip(fwd) {
         for c in 0..K {
-            rhs[(i, c)] = w[p][c];
+            rhs[(f, c)] = r[c];
         }
     }
 }
@@ -194,17 +196,22 @@ fn reach<const K: usize>(nodes: &[Supernode<'_>], w: &[[f64; K]]) -> Option<Vec<
     if nonzero * 4 > w.len() {
         return None;
     }
-    let mut node_of_col = vec![usize::MAX; w.len()];
-    for (k, s) in nodes.iter().enumerate() {
-        node_of_col[s.start..s.start + s.width].fill(k);
-    }
+    // The supernode holding column i (supernodes are ascending, contiguous column ranges;
+    // a search per visited column instead of an n-long table per solve).
+    let node_of_col = |i: usize| {
+        let k = nodes.partition_point(|s| s.start + s.width <= i);
+        nodes
+            .get(k)
+            .filter(|s| s.start <= i)
+            .map_or(usize::MAX, |_| k)
+    };
     let mut marked = vec![false; nodes.len()];
     let mut count = 0;
     for (i, r) in w.iter().enumerate() {
         if r.iter().all(|&v| v == 0.0) {
             continue;
         }
-        let mut k = node_of_col[i];
+        let mut k = node_of_col(i);
         // The parent of a supernode holds its first below-diagonal row.
         while k != usize::MAX && !marked[k] {
             marked[k] = true;
@@ -212,7 +219,7 @@ fn reach<const K: usize>(nodes: &[Supernode<'_>], w: &[[f64; K]]) -> Option<Vec<
             k = nodes[k]
                 .pattern
                 .first()
-                .map_or(usize::MAX, |&r| node_of_col[r]);
+                .map_or(usize::MAX, |&r| node_of_col(r));
         }
     }
     if count * 2 > nodes.len() {
