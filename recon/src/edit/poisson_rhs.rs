@@ -4,8 +4,9 @@
 //! Everything that does not depend on the handle transforms is laid out once per
 //! factorisation. The local vertices are renumbered into *slots*: the free vertices in the
 //! factor's row order ([`FixedSolver::solve_factor_rows`]), then the constrained ones in the
-//! order of [`FixedSolver::known`]. The non-degenerate faces, with their slots and
-//! area-weighted hat gradients, are stored in one array sorted by their first slot. The
+//! order of [`FixedSolver::known`]. The non-degenerate faces with a free vertex, with their
+//! slots and area-weighted hat gradients, are stored in one array sorted by their smallest
+//! slot. The
 //! fill-reducing order is a nested dissection or minimum degree order, so neighbouring
 //! vertices get nearby slots: the face pass reads and accumulates per-vertex buffers almost
 //! sequentially, and the divergence of the free slots is already the triangular solves'
@@ -19,10 +20,15 @@
 //!   handle vertices 1; fixed vertices 0). With `c_k, s_k` the cosine and sine of the
 //!   half angles, a face's normalised quaternion sum is the rotation about `a` by `φ` with
 //!   `sin φ = 2CS/(C² + S²)` and `1 − cos φ = 2S²/(C² + S²)` (`C = Σ c_k`, `S = Σ s_k`,
-//!   signs aligned as in [`face_map`]), and `R = I + sin φ [a]× + (1 − cos φ) [a]×²`. The
-//!   divergence is therefore `D(σ) + [a]× D(σ sin φ) + [a]×² D(σ(1 − cos φ))` with `D` the
-//!   divergence of a per-face scalar times the rest gradients (`D(1)` is precomputed): two or
-//!   three scalars per face, no square root, no 3×3 map.
+//!   signs aligned as in [`face_map`]), and `R = I + sin φ [a]× + (1 − cos φ) [a]×²`: with
+//!   `[a]×` and `[a]×²` formed once per move, a face map costs two scalar-matrix products
+//!   (no square root, no quaternion-to-matrix conversion). The per-face scalars are a pass
+//!   of their own before the accumulation (each waits on a division; fused, the
+//!   accumulation stalls behind it).
+//!
+//! Faces store two gradients (the third is minus their sum, the hat functions summing to
+//! one), 64 bytes a face, and images of the third gradient are minus the sum of the
+//! others'.
 
 use nalgebra::UnitQuaternion;
 
@@ -74,8 +80,6 @@ pub(crate) struct PoissonRhs {
     n_free: usize,
     /// Per slot, for [`Field::Axial`]: the weight `λ` of the handle's transform.
     weight: Vec<f64>,
-    /// Divergence of the rest gradients per slot (the `σ = 1` part of [`Field::Axial`]).
-    rest_div: Vec<[f64; 3]>,
     /// Per slot: rotation and log-scale ([`Field::Quaternions`]).
     quats: Vec<(UnitQuaternion<f64>, f64)>,
     /// Per slot: the cosine and sine of half the angle about the axis and the log-scale
@@ -83,8 +87,6 @@ pub(crate) struct PoissonRhs {
     vert: Vec<[f64; 3]>,
     /// Divergence per slot; its free part is the reduced right-hand side, then solution.
     b: Vec<[f64; 3]>,
-    /// [`Field::Axial`]: divergences of `σ sin φ ∇B` and `σ (1 − cos φ) ∇B` per slot.
-    b_axial: Vec<[f64; 6]>,
     /// [`Field::Axial`]: per face `σ`, `σ sin φ`, `σ (1 − cos φ)`.
     scalars: Vec<[f64; 3]>,
 }
@@ -116,7 +118,6 @@ impl PoissonRhs {
             local[s] = l;
         }
         let mut faces = Vec::with_capacity(problem.faces.len());
-        let mut rest_div = vec![[0.0; 3]; n];
         let x = &problem.rest;
         for f in &problem.faces {
             let Some((normal, _)) = unit_normal(x[f[0]], x[f[1]], x[f[2]]) else {
@@ -133,12 +134,6 @@ impl PoissonRhs {
                 grads: [g[0], g[1]],
             };
             faces.push(t);
-            for (&v, g) in s.iter().zip(&t.gradients()) {
-                let r = &mut rest_div[v];
-                r[0] += g.x;
-                r[1] += g.y;
-                r[2] += g.z;
-            }
         }
         faces.sort_by_key(|t| t.slots.iter().copied().min());
         Ok(Self {
@@ -150,11 +145,9 @@ impl PoissonRhs {
                 .collect(),
             slot,
             local,
-            rest_div,
             quats: Vec::with_capacity(n),
             vert: vec![[1.0, 0.0, 0.0]; n],
             b: vec![[0.0; 3]; n],
-            b_axial: vec![[0.0; 6]; n],
             scalars: Vec::new(),
         })
     }
@@ -229,29 +222,9 @@ impl PoissonRhs {
             let (s, c) = (w * angle / 2.0).sin_cos();
             *v = [c, s, w * log_s];
         }
-        let scaled = log_s != 0.0;
-        if scaled {
-            self.accumulate_axial::<true>();
-        } else {
-            self.accumulate_axial::<false>();
-        }
-        let rows = self.b.iter_mut().zip(&self.b_axial).zip(&self.rest_div);
-        for ((b, ba), rest) in rows.take(self.n_free) {
-            let b0 = if scaled { *b } else { *rest };
-            let b1 = Vec3::new(ba[0], ba[1], ba[2]);
-            let b2 = Vec3::new(ba[3], ba[4], ba[5]);
-            let x = Vec3::new(b0[0], b0[1], b0[2]) + a.cross(b1) + a.cross(a.cross(b2));
-            *b = [x.x, x.y, x.z];
-        }
-    }
-
-    /// The divergences of [`Field::Axial`] into `b_axial` and, when `SCALED` (some
-    /// log-scale is not zero), the `σ` part into `b`.
-    fn accumulate_axial<const SCALED: bool>(&mut self) {
-        self.b_axial.fill([0.0; 6]);
-        if SCALED {
-            self.b.fill([0.0; 3]);
-        }
+        // [a]× and [a]×²: every face map is σ(I + sin φ [a]× + (1 − cos φ)[a]×²).
+        let k = Mat3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0);
+        let k2 = k * k;
         // Two passes: the face scalars first (short independent chains through a
         // division), then the accumulation; fused, every face waits for its division
         // (measured 25% more cycles).
@@ -260,22 +233,20 @@ impl PoissonRhs {
             let (sigma, sin, one_minus_cos) = axial_face(t.slots.map(|v| &self.vert[v as usize]));
             [sigma, sigma * sin, sigma * one_minus_cos]
         }));
+        self.b.fill([0.0; 3]);
         for (t, &[sigma, p, q]) in self.faces.iter().zip(&self.scalars) {
-            let grads = t.gradients();
-            for (&v, g) in t.slots.iter().zip(&grads) {
-                let r = &mut self.b_axial[v as usize];
-                r[0] += p * g.x;
-                r[1] += p * g.y;
-                r[2] += p * g.z;
-                r[3] += q * g.x;
-                r[4] += q * g.y;
-                r[5] += q * g.z;
-                if SCALED {
-                    let r = &mut self.b[v as usize];
-                    r[0] += sigma * g.x;
-                    r[1] += sigma * g.y;
-                    r[2] += sigma * g.z;
-                }
+            let mut m = k * p + k2 * q;
+            for d in 0..3 {
+                m[(d, d)] += sigma;
+            }
+            let [g0, g1] = t.grads;
+            let (m0, m1) = (mat_vec(&m, g0), mat_vec(&m, g1));
+            // The third gradient is −(g0 + g1), so its image is −(m0 + m1).
+            for (&v, x) in t.slots.iter().zip([m0, m1, -(m0 + m1)]) {
+                let r = &mut self.b[v as usize];
+                r[0] += x.x;
+                r[1] += x.y;
+                r[2] += x.z;
             }
         }
     }
