@@ -69,16 +69,27 @@ pub fn face_gradients(p: &EditProblem, x: &[Vec3]) -> Vec<Option<(f64, [Vec3; 3]
     p.faces
         .iter()
         .map(|&[a, b, c]| {
-            let n = triangle_normal(x[a], x[b], x[c]);
-            let len = n.norm();
-            if !(len > 0.0 && len.is_finite()) {
-                return None;
-            }
-            let nh = n / len;
-            let g = |from: usize, to: usize| nh.cross(x[to] - x[from]) * 0.5;
-            Some((0.5 * len, [g(b, c), g(c, a), g(a, b)]))
+            let (nh, len) = unit_normal(x[a], x[b], x[c])?;
+            Some((0.5 * len, hat_gradients(nh, [x[a], x[b], x[c]])))
         })
         .collect()
+}
+
+/// A triangle's unit normal and the length of its unnormalised normal (twice its area),
+/// `None` when degenerate.
+#[inline]
+pub fn unit_normal(a: Vec3, b: Vec3, c: Vec3) -> Option<(Vec3, f64)> {
+    let n = triangle_normal(a, b, c);
+    let len = n.norm();
+    (len > 0.0 && len.is_finite()).then(|| (n / len, len))
+}
+
+/// The area-weighted hat gradients `|T| ∇B_k = ½ n̂ × e_k` of a triangle with unit normal
+/// `nh` and corners `x` (`e_k` the edge opposite corner `k`, counter-clockwise).
+#[inline(always)]
+pub fn hat_gradients(nh: Vec3, x: [Vec3; 3]) -> [Vec3; 3] {
+    let g = |from: usize, to: usize| nh.cross(x[to] - x[from]) * 0.5;
+    [g(1, 2), g(2, 0), g(0, 1)]
 }
 
 /// Shortest edge-path distance over the local graph from `sources` (∞ if unreachable).

@@ -21,6 +21,7 @@ pub mod local;
 pub mod lse;
 pub mod naive;
 pub mod poisson;
+mod poisson_rhs;
 pub mod problem;
 pub mod run;
 pub mod session;

@@ -25,6 +25,12 @@
 //! handle's. A handle given as a similarity of its rest positions therefore edits like the
 //! equivalent transform, to round-off. (The paper's smoother *Linear* weighting within a
 //! boundary condition would need one distance field per handle vertex.)
+//!
+//! A move ([`EditMethod::solve`]) runs the same arithmetic, allocating only its result, in the
+//! factor's row order, with the face maps of a single transform handle in closed form
+//! ([`super::poisson_rhs`]); [`PoissonEditor::vertex_transforms`],
+//! [`PoissonEditor::face_maps`] and [`PoissonEditor::solve_with_face_maps`] are the plain
+//! steps, equal to it to round-off.
 
 use faer::Mat;
 use nalgebra::{UnitQuaternion, Vector3};
@@ -32,6 +38,7 @@ use nalgebra::{UnitQuaternion, Vector3};
 use super::local::{
     cotan_stiffness, face_gradients, from_mat, gather, graph_distance, graph_distance_nearest,
 };
+use super::poisson_rhs::{face_map, Field, PoissonRhs};
 use super::problem::{EditProblem, Role};
 use super::session::EditMethod;
 use super::similarity::{mat_vec, weighted_average, Mat3, Similarity};
@@ -59,11 +66,21 @@ pub struct PoissonEditor {
     solver: FixedSolver,
     /// Area-weighted hat gradients of the rest faces.
     grads: Vec<Option<(f64, [Vec3; 3])>>,
-    /// Per local vertex: normalised weights of [fixed, handle 0, handle 1, ...].
-    weights: Vec<Vec<f64>>,
+    /// Per local vertex, `1 + handles` consecutive entries: normalised weights of
+    /// [fixed, handle 0, handle 1, ...].
+    weights: Vec<f64>,
     /// Per handle, per local vertex: the position in the handle of its nearest handle vertex.
     nearest: Vec<Vec<usize>>,
     options: PoissonOptions,
+    /// The per-move layout and buffers.
+    rhs: PoissonRhs,
+    /// Reused buffer of [`Self::vertex_transforms`].
+    vertex: Vec<(UnitQuaternion<f64>, f64)>,
+}
+
+/// Whether a move's rotation field is [`Field::Axial`]: one handle, given as a transform.
+fn axial(problem: &EditProblem) -> bool {
+    matches!(problem.handles.as_slice(), [h] if h.shape.is_none())
 }
 
 impl PoissonEditor {
@@ -101,6 +118,18 @@ impl PoissonEditor {
         problem: &EditProblem,
         transforms: &[Similarity],
     ) -> Vec<(UnitQuaternion<f64>, f64)> {
+        let mut out = Vec::with_capacity(problem.len());
+        self.vertex_transforms_into(problem, transforms, &mut out);
+        out
+    }
+
+    /// [`Self::vertex_transforms`] into a reused buffer.
+    fn vertex_transforms_into(
+        &self,
+        problem: &EditProblem,
+        transforms: &[Similarity],
+        out: &mut Vec<(UnitQuaternion<f64>, f64)>,
+    ) {
         // The value of handle h seen from local vertex l.
         let value = |h: usize, l: usize| -> (UnitQuaternion<f64>, f64) {
             let (q, ls) = (transforms[h].rotation, transforms[h].scale.ln());
@@ -123,38 +152,38 @@ impl PoissonEditor {
             (axis, angle, transforms[0].scale.ln())
         });
         let per_vertex = problem.handles.first().is_some_and(|h| h.shape.is_some());
-        (0..problem.len())
-            .map(|l| match problem.role[l] {
-                Role::Handle(h) => value(h, l),
-                Role::Ring | Role::Anchor => (UnitQuaternion::identity(), 0.0),
-                Role::Free if !self.options.propagate => (UnitQuaternion::identity(), 0.0),
-                Role::Free => {
-                    let w = &self.weights[l];
-                    if let Some((axis, angle, log_s)) = single {
-                        let (axis, angle, log_s) = if per_vertex {
-                            let (q, ls) = value(0, l);
-                            let (a, t) = q.axis_angle().map_or((Vector3::z_axis(), 0.0), |x| x);
-                            (a, t, ls)
-                        } else {
-                            (axis, angle, log_s)
-                        };
-                        return (
-                            UnitQuaternion::from_axis_angle(&axis, w[1] * angle),
-                            w[1] * log_s,
-                        );
-                    }
-                    let mut items = Vec::with_capacity(w.len());
-                    items.push((UnitQuaternion::identity(), w[0]));
-                    let mut log_s = 0.0;
-                    for h in 0..transforms.len() {
-                        let (q, ls) = value(h, l);
-                        items.push((q, w[h + 1]));
-                        log_s += w[h + 1] * ls;
-                    }
-                    (weighted_average(&items), log_s)
+        let stride = 1 + problem.handles.len();
+        out.clear();
+        out.extend((0..problem.len()).map(|l| match problem.role[l] {
+            Role::Handle(h) => value(h, l),
+            Role::Ring | Role::Anchor => (UnitQuaternion::identity(), 0.0),
+            Role::Free if !self.options.propagate => (UnitQuaternion::identity(), 0.0),
+            Role::Free => {
+                let w = &self.weights[l * stride..(l + 1) * stride];
+                if let Some((axis, angle, log_s)) = single {
+                    let (axis, angle, log_s) = if per_vertex {
+                        let (q, ls) = value(0, l);
+                        let (a, t) = q.axis_angle().map_or((Vector3::z_axis(), 0.0), |x| x);
+                        (a, t, ls)
+                    } else {
+                        (axis, angle, log_s)
+                    };
+                    return (
+                        UnitQuaternion::from_axis_angle(&axis, w[1] * angle),
+                        w[1] * log_s,
+                    );
                 }
-            })
-            .collect()
+                let mut items = Vec::with_capacity(w.len());
+                items.push((UnitQuaternion::identity(), w[0]));
+                let mut log_s = 0.0;
+                for h in 0..transforms.len() {
+                    let (q, ls) = value(h, l);
+                    items.push((q, w[h + 1]));
+                    log_s += w[h + 1] * ls;
+                }
+                (weighted_average(&items), log_s)
+            }
+        }));
     }
 
     /// Per-face maps `σ_T R(q_T)` from per-vertex rotations and log-scales: `q_T` is the
@@ -162,27 +191,7 @@ impl PoissonEditor {
     /// mean, equal to the sequential slerp average to second order in their spread and
     /// exact when they agree), `σ_T` their geometric mean.
     pub fn face_maps(problem: &EditProblem, vertex: &[(UnitQuaternion<f64>, f64)]) -> Vec<Mat3> {
-        problem
-            .faces
-            .iter()
-            .map(|f| {
-                let q0 = vertex[f[0]].0.into_inner();
-                let mut q = q0;
-                for &v in &f[1..] {
-                    let qv = vertex[v].0.into_inner();
-                    q += if q0.dot(&qv) < 0.0 { -qv } else { qv };
-                }
-                let r = UnitQuaternion::new_normalize(q)
-                    .to_rotation_matrix()
-                    .into_inner();
-                let ls = vertex[f[0]].1 + vertex[f[1]].1 + vertex[f[2]].1;
-                if ls == 0.0 {
-                    r
-                } else {
-                    r * (ls / 3.0).exp()
-                }
-            })
-            .collect()
+        problem.faces.iter().map(|&f| face_map(vertex, f)).collect()
     }
 }
 
@@ -207,26 +216,39 @@ impl EditMethod for PoissonEditor {
             dists.push(d);
             nearest.push(near);
         }
-        let weights = (0..problem.len())
-            .map(|l| {
-                let raw: Vec<f64> = dists
-                    .iter()
-                    .map(|d| if d[l] > 0.0 { 1.0 / d[l] } else { 0.0 })
-                    .collect();
-                let s: f64 = raw.iter().sum();
-                if s > 0.0 && s.is_finite() {
-                    raw.iter().map(|w| w / s).collect()
-                } else {
-                    vec![0.0; raw.len()]
-                }
-            })
-            .collect();
+        let mut weights = Vec::with_capacity(problem.len() * dists.len());
+        for l in 0..problem.len() {
+            let raw = dists
+                .iter()
+                .map(|d| if d[l] > 0.0 { 1.0 / d[l] } else { 0.0 });
+            let s: f64 = raw.clone().sum();
+            if s > 0.0 && s.is_finite() {
+                weights.extend(raw.map(|w| w / s));
+            } else {
+                weights.extend(raw.map(|_| 0.0));
+            }
+        }
+        // One transform handle: every vertex rotates about its axis, by its weight.
+        let axial_weight: Vec<f64> = if axial(problem) {
+            (0..problem.len())
+                .map(|l| match problem.role[l] {
+                    Role::Handle(_) => 1.0,
+                    Role::Free if options.propagate => weights[2 * l + 1],
+                    _ => 0.0,
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let rhs = PoissonRhs::new(problem, &solver, &axial_weight)?;
         Ok(Self {
             solver,
             grads,
             weights,
             nearest,
             options: *options,
+            rhs,
+            vertex: Vec::new(),
         })
     }
 
@@ -235,13 +257,27 @@ impl EditMethod for PoissonEditor {
         problem: &EditProblem,
         transforms: &[Similarity],
     ) -> Result<Vec<Vec3>, EditError> {
-        let targets = problem.targets(transforms)?;
-        let vt = self.vertex_transforms(problem, transforms);
-        let maps = Self::face_maps(problem, &vt);
-        self.solve_with_face_maps(problem, &maps, &targets)
+        problem.check_transforms(transforms)?;
+        if let [t] = transforms {
+            if axial(problem) {
+                return self
+                    .rhs
+                    .solve(problem, &self.solver, transforms, Field::Axial(t));
+            }
+        }
+        let mut vertex = std::mem::take(&mut self.vertex);
+        self.vertex_transforms_into(problem, transforms, &mut vertex);
+        let x = self.rhs.solve(
+            problem,
+            &self.solver,
+            transforms,
+            Field::Quaternions(&vertex),
+        );
+        self.vertex = vertex;
+        x
     }
 
     fn factor_len(&self) -> usize {
-        0
+        self.solver.factor_len()
     }
 }

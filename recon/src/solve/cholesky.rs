@@ -18,7 +18,8 @@ use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
 
 use super::ordering::nested_dissection;
 use super::supernodal_solve::{
-    forward_supernodal_llt, solve_supernodal_llt, solve_supernodal_llt_plus,
+    forward_supernodal_llt, solve_supernodal_llt, solve_supernodal_llt_permuted,
+    solve_supernodal_llt_plus,
 };
 use super::SolveError;
 
@@ -319,6 +320,49 @@ impl CholeskySolver {
                 .solve_in_place_with_conj(Conj::No, rhs, par, stack),
             Factorization::Ldlt => LdltRef::new(&self.symbolic, &self.values)
                 .solve_in_place_with_conj(Conj::No, rhs, par, stack),
+        }
+        Ok(())
+    }
+
+    /// The factor's row order: row `k` of a [`Self::solve_factor_rows`] right-hand side is
+    /// row `order[k]` of the system (the fill-reducing permutation; identity without one).
+    pub fn factor_order(&self) -> Vec<usize> {
+        match self.symbolic.perm() {
+            Some(p) => p.arrays().0.to_vec(),
+            None => (0..self.dim()).collect(),
+        }
+    }
+
+    /// Solves `A X = B` in place for `K` right-hand sides stored row-interleaved with the
+    /// rows in the factor's order ([`Self::factor_order`]). A caller that assembles its
+    /// right-hand side straight into this layout saves the gather, the scatter and the
+    /// allocations of [`Self::solve_in_place`]; the result equals it to round-off.
+    pub fn solve_factor_rows<const K: usize>(&self, w: &mut [[f64; K]]) -> Result<(), SolveError> {
+        if !self.factored {
+            return Err(SolveError::NotFactorized);
+        }
+        if w.len() != self.dim() {
+            return Err(SolveError::Dimension(format!(
+                "rhs has {} rows, matrix {}",
+                w.len(),
+                self.dim()
+            )));
+        }
+        if self.uses_columnwise_kernel()
+            && solve_supernodal_llt_permuted(&self.symbolic, &self.values, w)
+        {
+            return Ok(());
+        }
+        let order = self.factor_order();
+        let mut y = Mat::<f64>::zeros(w.len(), K);
+        for (&i, r) in order.iter().zip(w.iter()) {
+            for (c, &v) in r.iter().enumerate() {
+                y[(i, c)] = v;
+            }
+        }
+        self.solve_in_place(y.as_mut())?;
+        for (&i, r) in order.iter().zip(w.iter_mut()) {
+            *r = std::array::from_fn(|c| y[(i, c)]);
         }
         Ok(())
     }

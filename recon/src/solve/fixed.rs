@@ -22,6 +22,8 @@ pub struct FixedSolver {
     unknown: Vec<usize>,
     a_uk: SparseMatrix,
     chol: CholeskySolver,
+    /// Per unknown slot: its row in the factor's order.
+    factor_row: Vec<usize>,
 }
 
 impl FixedSolver {
@@ -39,6 +41,10 @@ impl FixedSolver {
         let (slot, known, unknown) = partition(n, known)?;
         let (a_uu, a_uk) = split_blocks(a, &slot, unknown.len(), known.len())?;
         let chol = CholeskySolver::new(a_uu.as_ref(), options)?;
+        let mut factor_row = vec![NONE; unknown.len()];
+        for (k, u) in chol.factor_order().into_iter().enumerate() {
+            factor_row[u] = k;
+        }
         Ok(Self {
             n,
             slot,
@@ -46,6 +52,7 @@ impl FixedSolver {
             unknown,
             a_uk,
             chol,
+            factor_row,
         })
     }
 
@@ -70,6 +77,47 @@ impl FixedSolver {
     /// The known indices, in the order `known_values` rows are read.
     pub fn known(&self) -> &[usize] {
         &self.known
+    }
+
+    /// Stored entries of the Cholesky factor of `A_uu`.
+    pub fn factor_len(&self) -> usize {
+        self.chol.factor_len()
+    }
+
+    /// Per index of the full system: its row in the layout of [`Self::solve_factor_rows`],
+    /// or `usize::MAX` for a known index.
+    pub fn factor_rows(&self) -> Vec<usize> {
+        let mut rows = vec![NONE; self.n];
+        for (&i, &r) in self.unknown.iter().zip(&self.factor_row) {
+            rows[i] = r;
+        }
+        rows
+    }
+
+    /// [`Self::solve`] for `K` right-hand sides in place, without allocating: `w` holds the
+    /// free rows of `b`, row-interleaved, each at its [`Self::factor_rows`] position, and
+    /// becomes the free part of the solution in the same layout; `known_values` has one row
+    /// per [`Self::known`] index.
+    pub fn solve_factor_rows<const K: usize>(
+        &self,
+        w: &mut [[f64; K]],
+        known_values: &[[f64; K]],
+    ) -> Result<(), SolveError> {
+        if w.len() != self.unknown.len() || known_values.len() != self.known.len() {
+            return Err(SolveError::Dimension(
+                "rhs or known values have the wrong length".into(),
+            ));
+        }
+        let a = self.a_uk.as_ref();
+        for (j, x) in known_values.iter().enumerate() {
+            for (&u, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
+                let r = &mut w[self.factor_row[u]];
+                for c in 0..K {
+                    r[c] -= v * x[c];
+                }
+            }
+        }
+        self.chol.solve_factor_rows(w)
     }
 
     /// Solves for all columns of `b` (`n × c`) with `known_values` (`k × c`, rows in the

@@ -133,6 +133,33 @@ pub(crate) fn forward_supernodal_llt(
     Some(out)
 }
 
+/// Solves `L Lᵀ y = w` in place for `K` interleaved right-hand sides whose rows are already
+/// in the factor's (permuted) order: no gather or scatter. Returns `false`, leaving `w`
+/// untouched, if the factor is not supernodal or `w` has the wrong length.
+pub(crate) fn solve_supernodal_llt_permuted<const K: usize>(
+    symbolic: &SymbolicCholesky<usize>,
+    values: &[f64],
+    w: &mut [[f64; K]],
+) -> bool {
+    if w.len() != symbolic.nrows() {
+        return false;
+    }
+    let Some(nodes) = supernodes(symbolic, values) else {
+        return false;
+    };
+    forward_reach(&nodes, w);
+    backward(&nodes, w);
+    true
+}
+
+/// The forward substitution over the supernodes `w`'s nonzero rows reach.
+fn forward_reach<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
+    match reach(nodes, w) {
+        Some(visit) => forward_on(nodes, w, &visit),
+        None => forward(nodes, w),
+    }
+}
+
 fn solve_block<const K: usize>(
     nodes: &[Supernode<'_>],
     fwd: &[usize],
@@ -140,14 +167,13 @@ fn solve_block<const K: usize>(
     mut rhs: MatMut<'_, f64>,
     shared: Option<MatRef<'_, f64>>,
 ) {
-    let mut w: Vec<[f64; K]> = fwd
-        .iter()
-        .map(|&f| std::array::from_fn(|c| rhs[(f, c)]))
-        .collect();
-    match reach(nodes, &w) {
-        Some(visit) => forward_on(nodes, &mut w, &visit),
-        None => forward(nodes, &mut w),
+    // Gather and scatter read `rhs` and `w` in order and write through the permutation
+    // (independent stores instead of dependent random loads).
+    let mut w: Vec<[f64; K]> = vec![[0.0; K]; fwd.len()];
+    for (i, &p) in inv.iter().enumerate() {
+        w[p] = std::array::from_fn(|c| rhs[(i, c)]);
     }
+    forward_reach(nodes, &mut w);
     if let Some(b) = shared {
         for (k, r) in w.iter_mut().enumerate() {
             for (c, v) in r.iter_mut().enumerate() {
@@ -156,9 +182,9 @@ fn solve_block<const K: usize>(
         }
     }
     backward(nodes, &mut w);
-    for (i, &p) in inv.iter().enumerate() {
+    for (r, &f) in w.iter().zip(fwd) {
         for c in 0..K {
-            rhs[(i, c)] = w[p][c];
+            rhs[(f, c)] = r[c];
         }
     }
 }
@@ -170,17 +196,22 @@ fn reach<const K: usize>(nodes: &[Supernode<'_>], w: &[[f64; K]]) -> Option<Vec<
     if nonzero * 4 > w.len() {
         return None;
     }
-    let mut node_of_col = vec![usize::MAX; w.len()];
-    for (k, s) in nodes.iter().enumerate() {
-        node_of_col[s.start..s.start + s.width].fill(k);
-    }
+    // The supernode holding column i (supernodes are ascending, contiguous column ranges;
+    // a search per visited column instead of an n-long table per solve).
+    let node_of_col = |i: usize| {
+        let k = nodes.partition_point(|s| s.start + s.width <= i);
+        nodes
+            .get(k)
+            .filter(|s| s.start <= i)
+            .map_or(usize::MAX, |_| k)
+    };
     let mut marked = vec![false; nodes.len()];
     let mut count = 0;
     for (i, r) in w.iter().enumerate() {
         if r.iter().all(|&v| v == 0.0) {
             continue;
         }
-        let mut k = node_of_col[i];
+        let mut k = node_of_col(i);
         // The parent of a supernode holds its first below-diagonal row.
         while k != usize::MAX && !marked[k] {
             marked[k] = true;
@@ -188,7 +219,7 @@ fn reach<const K: usize>(nodes: &[Supernode<'_>], w: &[[f64; K]]) -> Option<Vec<
             k = nodes[k]
                 .pattern
                 .first()
-                .map_or(usize::MAX, |&r| node_of_col[r]);
+                .map_or(usize::MAX, |&r| node_of_col(r));
         }
     }
     if count * 2 > nodes.len() {
@@ -247,6 +278,7 @@ fn forward_node<const K: usize>(s: &Supernode<'_>, w: &mut [[f64; K]], tmp: &mut
 /// contribution column by column, then a dense triangular solve on the diagonal block.
 fn backward<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
     let mut tmp: Vec<[f64; K]> = Vec::new();
+    let mut below_dots: Vec<[f64; K]> = Vec::new();
     for s in nodes.iter().rev() {
         if s.width >= DENSE_WIDTH {
             backward_dense(s, w);
@@ -255,11 +287,19 @@ fn backward<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
         let rows = s.width + s.pattern.len();
         tmp.clear();
         tmp.extend(s.pattern.iter().map(|&r| w[r]));
+        // The below-diagonal products need only the gathered rows: all of them first, in
+        // ascending column order, so the supernode's values stream through memory once in
+        // address order; then the triangular solve on the diagonal block, in reverse.
+        below_dots.clear();
+        below_dots.extend(
+            s.values
+                .chunks_exact(rows)
+                .map(|col| dot4(&tmp, &col[s.width..])),
+        );
         for jj in (0..s.width).rev() {
-            let col = &s.values[jj * rows..(jj + 1) * rows];
-            let (block, below) = col.split_at(s.width);
+            let block = &s.values[jj * rows..jj * rows + s.width];
             let mut acc = w[s.start + jj];
-            let d = dot4(&tmp, below);
+            let d = below_dots[jj];
             for c in 0..K {
                 acc[c] -= d[c];
             }

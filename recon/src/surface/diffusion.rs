@@ -106,7 +106,7 @@ fn solve_err(e: SolveError) -> SurfaceError {
 
 enum Step2 {
     Soft(CholeskySolver),
-    Hard(FixedSolver),
+    Hard(Box<FixedSolver>),
 }
 
 /// The precomputed flow on one control mesh: constrained set, sharpness, symbolic factorisations.
@@ -168,10 +168,10 @@ impl SurfaceDiffusion {
         let step1 =
             CholeskySolver::new(a1.as_ref(), CholeskyOptions::default()).map_err(solve_err)?;
         let step2 = if opts.hard {
-            Step2::Hard(
+            Step2::Hard(Box::new(
                 FixedSolver::precompute(a2.as_ref(), &constrained, CholeskyOptions::default())
                     .map_err(solve_err)?,
-            )
+            ))
         } else {
             Step2::Soft(
                 CholeskySolver::new(a2.as_ref(), CholeskyOptions::default()).map_err(solve_err)?,
