@@ -16,58 +16,17 @@ mod common;
 mod surface_common;
 
 use common::netgen::{network_from_polygons, parametric_network, MeshDistance};
-use fires_recon::geometry::Vec3;
-use fires_recon::mesh::{Edge, Face, Halfedge, SurfaceMesh};
+use fires_recon::mesh::{Edge, Face, Halfedge};
 use fires_recon::network::Network;
 use fires_recon::surface::{
     catmull_clark_n, limit_positions, refine, refined_v1, subdivide_v1, subdivide_v1_control,
     triquadrify, CatmullClarkOptions, ControlMesh, CurveKeeping, V1Options, VertexTag,
 };
-use std::f64::consts::{FRAC_PI_2, PI, TAU};
-use surface_common::{control, face_normal, folded_sheet, CurveSpec};
+use std::f64::consts::{PI, TAU};
+use surface_common::{face_normal, folded_sheet, sphere_network};
 
 /// Catmull-Clark levels by which [`evaluate`] samples V1's surface more finely than its final level.
 const EVAL_LEVELS: usize = 2;
-
-/// The octahedron network of three orthogonal great circles of radius `r` (8 triangular faces).
-fn sphere_network(r: f64) -> ControlMesh {
-    let pts = vec![
-        Vec3::new(r, 0.0, 0.0),
-        Vec3::new(-r, 0.0, 0.0),
-        Vec3::new(0.0, r, 0.0),
-        Vec3::new(0.0, -r, 0.0),
-        Vec3::new(0.0, 0.0, r),
-        Vec3::new(0.0, 0.0, -r),
-    ];
-    let faces = vec![
-        vec![0, 2, 4],
-        vec![2, 1, 4],
-        vec![1, 3, 4],
-        vec![3, 0, 4],
-        vec![2, 0, 5],
-        vec![1, 2, 5],
-        vec![3, 1, 5],
-        vec![0, 3, 5],
-    ];
-    let mesh = SurfaceMesh::from_faces(&pts, &faces).unwrap();
-    let specs = mesh
-        .edges()
-        .map(|e| {
-            let (a, b) = mesh.edge_vertices(e);
-            let (pa, pb) = (pts[a.idx()], pts[b.idx()]);
-            CurveSpec {
-                chain: vec![a.idx(), b.idx()],
-                seg: Box::new(move |_, s| {
-                    let th = s * FRAC_PI_2;
-                    pa * th.cos() + pb * th.sin()
-                }),
-                samples: 64,
-                sharp: false,
-            }
-        })
-        .collect();
-    control(&pts, &faces, specs)
-}
 
 /// The bumpy height field of surface_v1_validation.rs over [0, 0.2 m]², 5 × 5 coarse quads; the curves on
 /// the grid line x = 0.08 m sharp when `sharp_line`.

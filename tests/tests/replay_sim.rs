@@ -4,12 +4,12 @@
 use std::path::PathBuf;
 
 use fires_host::replay::bar::{bar_report, measure_bar, smooth_bar, BarSmoothing};
-use fires_host::replay::report::{accuracy, world_report};
+use fires_host::replay::report::{accuracy, world_report, Accuracy};
 use fires_host::replay::run::world_reference;
 use fires_host::replay::strokes_vs_truth::{
     strokes_summary, strokes_vs_truth, StrokeCompareOptions,
 };
-use fires_host::replay::{replay, ReplayConfig};
+use fires_host::replay::{replay, ReplayConfig, ReplayOutput};
 use fires_host::stereo::TriangulationMethod;
 use fires_record::RecordingReader;
 use fires_sim::{run_scenario, SimOptions};
@@ -22,15 +22,26 @@ fn simulate(name: &str, seconds: f64, seed: u64) -> PathBuf {
     dir
 }
 
-#[test]
-fn a_fires_v1_session_is_tracked_within_2mm_with_no_wrong_labels() {
-    let dir = simulate("fires-v1", 6.0, 7);
+/// Simulates `name`, replays it with the default configuration and checks that its labels were
+/// checked against the truth (over a thousand) and none was wrong.
+fn track(
+    name: &str,
+    seconds: f64,
+    seed: u64,
+) -> (PathBuf, RecordingReader, ReplayOutput, Accuracy) {
+    let dir = simulate(name, seconds, seed);
     let reader = RecordingReader::open(&dir).expect("open");
     let out = replay(&reader, &ReplayConfig::default()).expect("replay");
     let truth = reader.exposure_truth().expect("truth").expect("simulated");
     let acc = accuracy(&out, &truth);
-    assert!(acc.labels_checked > 1000, "{acc:?}");
-    assert_eq!(acc.mislabels, 0, "{acc:?}");
+    assert!(acc.labels_checked > 1000, "{name} seed {seed}: {acc:?}");
+    assert_eq!(acc.mislabels, 0, "{name} seed {seed}: {acc:?}");
+    (dir, reader, out, acc)
+}
+
+#[test]
+fn a_fires_v1_session_is_tracked_within_2mm_with_no_wrong_labels() {
+    let (dir, reader, out, acc) = track("fires-v1", 6.0, 7);
     // fires-v1: 0.5 px centroid noise at 1024x768, 45 degree field of view, 0.25 m baseline.
     assert!(acc.frac_within_2mm.is_some_and(|f| f > 0.9), "{acc:?}");
     assert!(acc.tip_rmse_mm < 2.0, "{acc:?}");
@@ -120,13 +131,7 @@ fn the_bar_is_measured_near_its_length() {
 /// 0.6 m, fx 520 px and a 0.20 m baseline is about 0.3 mm of depth per LED.
 #[test]
 fn a_webcam_session_tracks_every_stroke_on_the_pens_path() {
-    let dir = simulate("webcam", 14.0, 4);
-    let reader = RecordingReader::open(&dir).expect("open");
-    let out = replay(&reader, &ReplayConfig::default()).expect("replay");
-    let truth = reader.exposure_truth().expect("truth").expect("simulated");
-    let acc = accuracy(&out, &truth);
-    assert!(acc.labels_checked > 1000, "{acc:?}");
-    assert_eq!(acc.mislabels, 0, "{acc:?}");
+    let (dir, reader, out, _) = track("webcam", 14.0, 4);
     let true_strokes = reader.strokes().expect("truth").expect("simulated");
     let complete: Vec<_> = true_strokes.into_iter().filter(|s| s.complete).collect();
     assert!(complete.len() >= 2, "{complete:?}");

@@ -178,3 +178,44 @@ pub fn folded_sheet(a: f64) -> ControlMesh {
     ];
     control(&pts, &faces, specs)
 }
+
+/// The octahedron network of three orthogonal great circles of radius `r`: 6 vertices, 12 quarter arcs
+/// (sampled 64 times each), 8 triangular faces.
+pub fn sphere_network(r: f64) -> ControlMesh {
+    let pts = vec![
+        Vec3::new(r, 0.0, 0.0),
+        Vec3::new(-r, 0.0, 0.0),
+        Vec3::new(0.0, r, 0.0),
+        Vec3::new(0.0, -r, 0.0),
+        Vec3::new(0.0, 0.0, r),
+        Vec3::new(0.0, 0.0, -r),
+    ];
+    let faces = vec![
+        vec![0, 2, 4],
+        vec![2, 1, 4],
+        vec![1, 3, 4],
+        vec![3, 0, 4],
+        vec![2, 0, 5],
+        vec![1, 2, 5],
+        vec![3, 1, 5],
+        vec![0, 3, 5],
+    ];
+    let mesh = SurfaceMesh::from_faces(&pts, &faces).unwrap();
+    let specs = mesh
+        .edges()
+        .map(|e| {
+            let (a, b) = mesh.edge_vertices(e);
+            let (pa, pb) = (pts[a.idx()], pts[b.idx()]);
+            CurveSpec {
+                chain: vec![a.idx(), b.idx()],
+                seg: Box::new(move |_, s| {
+                    let th = s * std::f64::consts::FRAC_PI_2;
+                    pa * th.cos() + pb * th.sin()
+                }),
+                samples: 64,
+                sharp: false,
+            }
+        })
+        .collect();
+    control(&pts, &faces, specs)
+}
