@@ -52,7 +52,7 @@ pub fn row_times_ns(meta: &Meta) -> [f64; 2] {
     std::array::from_fn(|i| {
         let stream = meta.cameras.iter().find(|c| usize::from(c.id) == i);
         let height = meta.rig.cameras.get(i).map_or(0, |c| c.intrinsics.height);
-        stream.map_or(0.0, |s| s.row_time_s(1.0, height) * 1e9)
+        stream.map_or(0.0, |s| s.row_period_s(height) * 1e9)
     })
 }
 

@@ -23,12 +23,6 @@ pub struct EncodedImage {
 }
 
 impl EncodedImage {
-    /// Encodes `img`, compressed or plain (compression fails only if the compressor cannot allocate). To
-    /// encode many frames, an [`ImageEncoder`] reuses its compression context.
-    pub fn encode(img: &GrayImage, compress: bool) -> std::io::Result<Self> {
-        ImageEncoder::new(compress)?.encode(img)
-    }
-
     /// The file name of frame `index`'s image in this encoding.
     pub fn file_name(&self, index: u64) -> String {
         if self.compressed {

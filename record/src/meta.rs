@@ -283,12 +283,13 @@ impl CameraStream {
         }
     }
 
-    /// Time after the frame time at which row `y` (pixels, of `height` rows) was exposed, seconds.
-    pub fn row_time_s(&self, y: f64, height: u32) -> f64 {
-        if self.readout_s == 0.0 || height == 0 {
+    /// The rolling-shutter delay of one pixel row after the previous, seconds, for a sensor of `height` rows
+    /// (0 for a global shutter).
+    pub fn row_period_s(&self, height: u32) -> f64 {
+        if height == 0 {
             0.0
         } else {
-            self.readout_s * y / f64::from(height)
+            self.readout_s / f64::from(height)
         }
     }
 }

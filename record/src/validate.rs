@@ -160,6 +160,7 @@ impl Meta {
                 s.nominal_rate_hz,
                 "frame rate",
             )?;
+            let period = 1.0 / s.nominal_rate_hz;
             for (field, v) in [("exposure_s", s.exposure_s), ("readout_s", s.readout_s)] {
                 if !(v.is_finite() && v >= 0.0) {
                     return Err(problem(
@@ -168,9 +169,6 @@ impl Meta {
                         "must be a finite time of at least 0 s",
                     ));
                 }
-            }
-            let period = 1.0 / s.nominal_rate_hz;
-            for (field, v) in [("exposure_s", s.exposure_s), ("readout_s", s.readout_s)] {
                 if v > period {
                     return Err(problem(
                         format!("cameras[{k}].{field}"),

@@ -7,7 +7,7 @@
 //! about that much. Image files are written whole before the frame line that names them.
 
 use crate::error::RecordError;
-use crate::image::{EncodedImage, GrayImage};
+use crate::image::{EncodedImage, GrayImage, ImageEncoder};
 use crate::meta::Meta;
 use crate::truth::{ExposureTruth, ImuTruth, PacketTruth, StrokeTruth, WorldTruth};
 use crate::{camera_dir_name, CameraFrame, LinkChunk};
@@ -119,6 +119,8 @@ pub struct RecordingWriter {
     /// Directories that gained entries since the last sync.
     unsynced_dirs: Vec<PathBuf>,
     last_sync: Instant,
+    /// Encodes frame images (one compression context for the whole recording).
+    encoder: ImageEncoder,
 }
 
 fn write_json_file<T: Serialize>(path: PathBuf, value: &T) -> Result<(), RecordError> {
@@ -187,6 +189,8 @@ impl RecordingWriter {
             unsynced_images: Vec::new(),
             unsynced_dirs,
             last_sync: Instant::now(),
+            encoder: ImageEncoder::new(options.compress_images)
+                .map_err(|e| RecordError::io(dir, e))?,
         };
         if options.sync_interval.is_some() {
             // meta.json and the empty streams exist on disk before the first record.
@@ -285,7 +289,7 @@ impl RecordingWriter {
         image: Option<&GrayImage>,
     ) -> Result<(), RecordError> {
         let encoded = image
-            .map(|img| EncodedImage::encode(img, self.options.compress_images))
+            .map(|img| self.encoder.encode(img))
             .transpose()
             .map_err(|e| RecordError::io(self.dir.join(camera_dir_name(frame.camera)), e))?;
         self.write_frame_encoded(frame, encoded.as_ref())

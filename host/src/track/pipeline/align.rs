@@ -163,8 +163,9 @@ impl TimeAlignment {
     }
 
     /// Keeps a new frame of camera `cam` (0 left, 1 right) exposed at `t_ns` (left clock, its first
-    /// row), with its blobs' radii (empty when unknown), and returns the frame's time: `t_ns` for a global shutter, else the time of its blobs'
-    /// median row, from which each blob keeps its own row's delay.
+    /// row), with its blobs' radii (empty when unknown), and returns the frame's time: `t_ns` for a
+    /// global shutter, else the time of its blobs' median row, from which each blob keeps its own
+    /// row's delay.
     pub(super) fn push(
         &mut self,
         cam: usize,
