@@ -29,6 +29,7 @@ mod align;
 mod clock_offset;
 mod config;
 mod line_order;
+mod merged;
 mod prior;
 mod refusal;
 mod safety;
@@ -49,6 +50,7 @@ use crate::stereo::{CameraId, Correspondences, StereoRig, Triangulator};
 use crate::vision::Rect;
 use align::{AlignOptions, PairPoints, TimeAlignment};
 use clock_offset::{ClockOffsetEstimator, ClockOptions};
+use merged::{complete_merged, MergedOptions};
 use nalgebra::Vector3;
 use prior::DirectionPrior;
 use safety::{LabelGuard, PairView};
@@ -342,7 +344,10 @@ impl Tracker {
                     IdentifyError::ContradictedByImage => RefusedBy::ImageEvidence,
                     IdentifyError::Ambiguous => RefusedBy::Rival,
                 });
-                return self.refused(t, Refusal::Identify(by));
+                match self.complete_merged(t, by) {
+                    Some(id) => id,
+                    None => return self.refused(t, Refusal::Identify(by)),
+                }
             }
         };
         // The vision tip (its axis also feeds the safety checks and the fusion).
@@ -383,6 +388,38 @@ impl Tracker {
         self.vision_sample(this, t, &id, vision)
     }
 
+    /// The labelling of a pair whose identification was refused for want of LEDs or for a blob
+    /// its pen did not explain (not for a conflict: a rival, a twin, an identity swap or the
+    /// fused direction), when two
+    /// triangulated LEDs and the images of the other two, merged with a neighbour's spot in one
+    /// camera, explain the pen uniquely (`pipeline/merged.rs`).
+    fn complete_merged(&self, t: u64, refused_by: RefusedBy) -> Option<Identification> {
+        let conflict = matches!(
+            refused_by,
+            RefusedBy::Twin
+                | RefusedBy::Rival
+                | RefusedBy::TradingPlaces
+                | RefusedBy::DirectionPrior
+        );
+        if conflict || self.correspondences.candidates.len() < 2 {
+            return None;
+        }
+        let pair = PairView {
+            rig: &self.rig,
+            align: &self.align,
+            points: &self.points,
+            candidates: &self.correspondences.candidates,
+            tip: &self.tip,
+            t,
+        };
+        let options = MergedOptions {
+            led_offsets: self.config.pen.led_offsets,
+            tolerance: self.config.identify.tolerance,
+            gate_px: self.config.correspondence.max_epipolar_px,
+        };
+        complete_merged(&pair, &options)
+    }
+
     /// Fusion and output of a labelled pair: world estimate, clock offset, direction filter, the
     /// tip along the chosen axis, dead reckoner and tip filter.
     fn vision_sample(
@@ -402,7 +439,7 @@ impl Tracker {
         // alignment and continuity (a mirrored chain still tracks each blob consistently) but
         // give no tip.
         if self.direction.world().is_none()
-            && id.count() < LED_COUNT
+            && id.located() < LED_COUNT
             && (id.count() < 3 || id.resolution != Resolution::Geometry)
         {
             self.remember_labels(this, t, id, &vision);
@@ -546,13 +583,18 @@ impl Tracker {
         self.tip_filter.predict(t_ns).map(Into::into)
     }
 
-    /// Search window for the blob detector of `camera` at `t_ns`: the last identified LEDs
-    /// projected into that camera, grown by `margin_px`; None when there is no recent track.
+    /// Search window for the blob detector of `camera` at `t_ns`: the whole pen (all four LEDs
+    /// of the last pose, moved to `t_ns`, and the last identified LEDs) projected into that
+    /// camera, grown by `margin_px`; None when there is no recent track. The unlabelled LEDs
+    /// must be inside it too: a window around the two labelled LEDs of a two-LED frame would
+    /// hide the others from every later frame, which then could label only those two.
     pub fn predicted_window(&self, camera: CameraId, t_ns: u64, margin_px: f64) -> Option<Rect> {
         let leds = self.labels.recent_leds(t_ns)?;
+        let pen = self.align.predicted_leds(t_ns);
         let pts: Vec<[f64; 2]> = leds
             .iter()
             .flatten()
+            .chain(pen.iter().flatten())
             .filter_map(|p| self.rig.project(camera, p).ok())
             .collect();
         let cam = self.rig.camera(camera);

@@ -85,6 +85,9 @@ pub struct OrientationFilter {
     /// Variance of the pen-axis direction per perpendicular axis, rad^2.
     p_var: f64,
     last_vision_ns: Option<u64>,
+    /// Bias-corrected angular rate of the last IMU sample (pen frame, rad/s): carries the
+    /// orientation from that sample to a later camera time.
+    rate: Vector3<f64>,
 }
 
 impl OrientationFilter {
@@ -101,6 +104,7 @@ impl OrientationFilter {
             history: VecDeque::with_capacity(256),
             p_var: 1.0,
             last_vision_ns: None,
+            rate: Vector3::zeros(),
         }
     }
 
@@ -159,6 +163,20 @@ impl OrientationFilter {
         }
     }
 
+    /// Orientation at `t_ns`: from the history (slerp) up to the last IMU sample, after it the
+    /// last sample's rate carried on (for at most `max_gap_ns`). A camera frame is usually exposed
+    /// after the last IMU sample that has arrived (one sample period, plus the link's latency):
+    /// holding the last orientation would lag a pen turning at 3 rad/s by several degrees.
+    fn orientation_at_time(&self, t_ns: u64) -> UnitQuaternion<f64> {
+        match self.t_ns {
+            Some(t) if t_ns > t => {
+                let dt = (t_ns - t).min(self.config.max_gap_ns) as f64 * 1e-9;
+                self.q * UnitQuaternion::from_scaled_axis(self.rate * dt)
+            }
+            _ => self.orientation_in_history(t_ns),
+        }
+    }
+
     /// Orientation at `t_ns` from the history (slerp), or the current one outside it.
     fn orientation_in_history(&self, t_ns: u64) -> UnitQuaternion<f64> {
         let i = self.history.partition_point(|(t, _)| *t <= t_ns);
@@ -208,6 +226,7 @@ impl DirectionFilter for OrientationFilter {
         let dt_ns = s.t_ns - t0;
         self.t_ns = Some(s.t_ns);
         if dt_ns > self.config.max_gap_ns {
+            self.rate = Vector3::from(s.gyro) - self.bias;
             self.record(s.t_ns);
             return;
         }
@@ -221,7 +240,8 @@ impl DirectionFilter for OrientationFilter {
             e = Vector3::x() * e.x;
         }
         self.bias -= e * (self.config.k_bias * dt);
-        let omega = Vector3::from(s.gyro) - self.bias + e;
+        self.rate = Vector3::from(s.gyro) - self.bias;
+        let omega = self.rate + e;
         self.q *= UnitQuaternion::from_scaled_axis(omega * dt);
         self.p_var = (self.p_var + self.config.axis_random_walk * dt).min(1.0);
         self.record(s.t_ns);
@@ -237,7 +257,7 @@ impl DirectionFilter for OrientationFilter {
         if !self.initialised {
             return;
         }
-        let q_f = self.orientation_in_history(t_ns);
+        let q_f = self.orientation_at_time(t_ns);
         let measured = q_f.inverse() * v;
         let e = Vector3::x().cross(&measured);
         let angle = e.norm().asin().min(std::f64::consts::FRAC_PI_2);
@@ -293,10 +313,7 @@ impl DirectionFilter for OrientationFilter {
         if !self.initialised {
             return None;
         }
-        match self.t_ns {
-            Some(t) if t_ns >= t => Some(self.q),
-            _ => Some(self.orientation_in_history(t_ns)),
-        }
+        Some(self.orientation_at_time(t_ns))
     }
 }
 
@@ -395,6 +412,42 @@ mod tests {
         );
         // Measured 0.37 against 0.56 degrees.
         assert!(e_owns < 0.75 * e_fights, "{e_owns} vs {e_fights}");
+    }
+
+    /// Between IMU samples (and after the last one, where camera frames usually fall) the
+    /// orientation follows the last rate: exact for a constant rotation, where holding the last
+    /// sample's orientation would lag by the rate times the time since it.
+    #[test]
+    fn orientation_between_and_after_samples_follows_the_rate() {
+        let config = OrientationConfig {
+            k_accel: 0.0,
+            k_mag: 0.0,
+            k_bias: 0.0,
+            ..OrientationConfig::default()
+        };
+        let mut f = OrientationFilter::new(config, WorldReference::default());
+        let w = Vector3::new(0.3, -1.0, 3.0);
+        let sample = |t_ns: u64| ImuSample {
+            t_ns,
+            accel: [0.0, 0.0, 9.81],
+            gyro: w.into(),
+            mag: [20.0, 0.0, -40.0],
+        };
+        for k in 0..=10u64 {
+            f.imu(&sample(k * 10_000_000));
+        }
+        let q0 = *f.orientation();
+        let after = f.orientation_at(107_000_000).unwrap();
+        let expected = q0 * UnitQuaternion::from_scaled_axis(w * 0.007);
+        assert!(
+            after.angle_to(&expected) < 1e-9,
+            "{}",
+            after.angle_to(&expected)
+        );
+        assert!(q0.angle_to(&expected) > 0.02);
+        let between = f.orientation_at(95_000_000).unwrap();
+        let mid = q0 * UnitQuaternion::from_scaled_axis(w * -0.005);
+        assert!(between.angle_to(&mid) < 1e-9, "{}", between.angle_to(&mid));
     }
 
     #[test]

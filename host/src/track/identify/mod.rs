@@ -58,12 +58,21 @@ pub struct Identification {
     pub resolution: Resolution,
     /// Number of candidates sharing no blob with the labelled LEDs (interference points).
     pub interference: usize,
+    /// LEDs without a stereo candidate that were still found where the labelled pen puts them:
+    /// a blob of their own in one camera, and in the other inside one blob with a neighbour's
+    /// spot (bit i = LED i+1; see the tracker's merged-spot completion).
+    pub completed: u8,
 }
 
 impl Identification {
     /// Number of identified LEDs.
     pub fn count(&self) -> usize {
         self.assignment.iter().flatten().count()
+    }
+
+    /// Number of LEDs the labelling located: identified plus completed.
+    pub fn located(&self) -> usize {
+        self.count() + self.completed.count_ones() as usize
     }
 
     /// Bit mask of identified LEDs (bit i = LED i+1).
@@ -298,6 +307,7 @@ impl Identifier {
             confidence: fit * coverage * penalty,
             resolution,
             interference,
+            completed: 0,
         }
     }
 }

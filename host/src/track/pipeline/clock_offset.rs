@@ -204,6 +204,7 @@ mod tests {
             confidence: 1.0,
             resolution: crate::track::identify::Resolution::Geometry,
             interference: 0,
+            completed: 0,
         };
         c.observe(
             &rig,

@@ -389,6 +389,7 @@ mod tests {
             confidence: 1.0,
             resolution: Resolution::Geometry,
             interference: 0,
+            completed: 0,
         };
         let s = [l[0], l[2], l[3]];
         let mean = s.iter().sum::<f64>() / 3.0;

@@ -41,7 +41,7 @@ pub enum Unsafe {
 /// Two LED images must lie this many times the sum of their blobs' radii apart: spots whose
 /// thresholded discs touch merge into one blob, and a blob grown by motion blur or a neighbour's
 /// faint tail is up to this much wider than its disc.
-const MERGE_MARGIN: f64 = 1.2;
+pub(super) const MERGE_MARGIN: f64 = 1.2;
 
 /// Accepted labels and the checks a new labelling must pass.
 #[derive(Debug, Clone)]
@@ -106,10 +106,14 @@ impl LabelGuard {
         vision: &TipEstimate,
         stale_prior: bool,
     ) -> Option<Unsafe> {
-        if id.count() < 3 && (stale_prior || !self.labels_match_prediction(pair, id)) {
+        if id.count() < 3
+            && id.located() < LED_COUNT
+            && (stale_prior || !self.labels_match_prediction(pair, id))
+        {
             return Some(Unsafe::TwoLedsUnconfirmed);
         }
-        if !self.pen_images_separated(pair, vision, id) {
+        // A completed labelling checked its own LEDs' separation blob by blob (`merged.rs`).
+        if id.completed == 0 && !self.pen_images_separated(pair, vision, id) {
             return Some(Unsafe::PenImagesOverlap);
         }
         (!self.labelled_blobs_isolated(pair, id)).then_some(Unsafe::BlobNotIsolated)
@@ -302,6 +306,7 @@ mod tests {
             confidence: 1.0,
             resolution: Resolution::Geometry,
             interference: 0,
+            completed: 0,
         }
     }
 

@@ -567,3 +567,144 @@ fn three_leds_give_tips_before_the_world_is_accepted() {
         "{before} vision samples before the world at {t_world} s"
     );
 }
+
+/// A pen whose back end points almost at the right camera (tilted 8 degrees off the line to it):
+/// the left image shows its four LEDs well apart, the right image only a short vertical pen whose
+/// LEDs `first + 1` and `first + 2` (12-17 px apart) are drawn there as one merged blob half-way
+/// between them, in the first one's place. Returns the rig, the pen, its four LED positions and
+/// the left and right frames at `t`.
+fn merged_spot_scene(
+    t: u64,
+    first: usize,
+) -> (
+    StereoRig,
+    PenGeometry,
+    [Vector3<f64>; 4],
+    CameraFrame,
+    CameraFrame,
+) {
+    let rig = StereoRig::parallel(1024, 768, 45f64.to_radians(), 0.25);
+    let pen = PenGeometry {
+        tip_offset: 0.02,
+        ..PenGeometry::thesis()
+    };
+    let right_centre = Vector3::new(0.25, 0.0, 0.0);
+    let led1 = Vector3::new(0.125, 0.0, 0.9);
+    let to_camera = (right_centre - led1).normalize();
+    let back = (to_camera + Vector3::y() * 8f64.to_radians().tan()).normalize();
+    let leds = pen.led_offsets.map(|l| led1 + back * l);
+    let px = |camera, p: &Vector3<f64>| rig.project(camera, p).unwrap();
+    let left: Vec<[f64; 2]> = leds.iter().map(|p| px(CameraId::Left, p)).collect();
+    let mut right: Vec<[f64; 2]> = leds.iter().map(|p| px(CameraId::Right, p)).collect();
+    let gap = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    assert!((0..3).all(|k| gap(left[k], left[k + 1]) > 20.0), "{left:?}");
+    let merged_gap = gap(right[first], right[first + 1]);
+    assert!((8.0..20.0).contains(&merged_gap), "{right:?}");
+    let mut radii = vec![3.0; 3];
+    radii[first] = 0.5 * merged_gap + 3.0;
+    let second = right.remove(first + 1);
+    right[first] = [
+        0.5 * (right[first][0] + second[0]),
+        0.5 * (right[first][1] + second[1]),
+    ];
+    let left_frame = CameraFrame {
+        radii: vec![3.0; 4],
+        ..CameraFrame::new(CameraId::Left, t, left)
+    };
+    let right_frame = CameraFrame {
+        radii,
+        ..CameraFrame::new(CameraId::Right, t, right)
+    };
+    (rig, pen, leds, left_frame, right_frame)
+}
+
+/// The merged blob lies on neither LED's epipolar line, so only LEDs 1 and 4 triangulate; the
+/// left image and the merged blob still explain LEDs 2 and 3 where that pen puts them, so the
+/// frame is labelled (LEDs 1 and 4, the others completed) and its tip is exact, even before a
+/// world reference exists.
+#[test]
+fn leds_merged_in_one_camera_are_completed_from_the_other() {
+    let t = 1_000_000;
+    let (rig, pen, leds, left, right) = merged_spot_scene(t, 1);
+    let cfg = TrackerConfig {
+        pen,
+        time_align: false,
+        ..TrackerConfig::default()
+    };
+    let mut tracker = Tracker::new(rig, cfg).unwrap();
+    assert!(tracker.push_frame(left).is_none());
+    let s = tracker.push_frame(right).unwrap();
+    assert_eq!(
+        s.quality,
+        TrackQuality::Vision { leds: 2 },
+        "{:?}",
+        tracker.last_refusal()
+    );
+    assert_eq!(s.labels, [Some((0, 0)), None, None, Some((3, 2))]);
+    let tip = leds[0] - (leds[3] - leds[0]).normalize() * pen.tip_offset;
+    let raw = Vector3::from(s.raw_tip.unwrap());
+    assert!(
+        (raw - tip).norm() < 1e-6,
+        "tip off by {} m",
+        (raw - tip).norm()
+    );
+}
+
+/// The completion needs the merge explained: without the merged blob (LEDs 2 and 3 unseen in
+/// the right camera), or with it pushed off the pen's image, the frame is refused.
+#[test]
+fn an_unexplained_merge_is_not_completed() {
+    let t = 1_000_000;
+    let (rig, pen, _, left, right) = merged_spot_scene(t, 1);
+    let cfg = TrackerConfig {
+        pen,
+        time_align: false,
+        ..TrackerConfig::default()
+    };
+    let mut missing = right.clone();
+    missing.blobs.remove(1);
+    missing.radii.remove(1);
+    let mut shifted = right.clone();
+    shifted.blobs[1][0] += 5.0;
+    for frame in [missing, shifted] {
+        let mut tracker = Tracker::new(rig.clone(), cfg.clone()).unwrap();
+        assert!(tracker.push_frame(left.clone()).is_none());
+        let s = tracker.push_frame(frame).unwrap();
+        assert!(!matches!(s.quality, TrackQuality::Vision { .. }), "{s:?}");
+        assert!(s.labels.iter().all(Option::is_none));
+    }
+}
+
+/// The detector's search window covers the whole pen, not only the labelled LEDs: after a frame
+/// labelled with LEDs 1 and 2 (3 and 4 merged in the right camera) the windows of both cameras
+/// still hold the images of LEDs 3 and 4, so the next frames can label them again.
+#[test]
+fn the_search_window_covers_the_unlabelled_leds() {
+    let t = 1_000_000;
+    let (rig, pen, leds, left, right) = merged_spot_scene(t, 2);
+    let cfg = TrackerConfig {
+        pen,
+        time_align: false,
+        ..TrackerConfig::default()
+    };
+    let mut tracker = Tracker::new(rig.clone(), cfg).unwrap();
+    assert!(tracker.push_frame(left).is_none());
+    let s = tracker.push_frame(right).unwrap();
+    assert_eq!(
+        s.labels,
+        [Some((0, 0)), Some((1, 1)), None, None],
+        "{:?}",
+        tracker.last_refusal()
+    );
+    for camera in [CameraId::Left, CameraId::Right] {
+        let w = tracker.predicted_window(camera, t, 2.0).unwrap();
+        for p in &leds {
+            let [x, y] = rig.project(camera, p).unwrap();
+            let inside = x >= w.x as f64
+                && x < (w.x + w.width) as f64
+                && y >= w.y as f64
+                && y < (w.y + w.height) as f64;
+            assert!(inside, "{camera:?}: LED at ({x:.1}, {y:.1}) outside {w:?}");
+        }
+    }
+}
