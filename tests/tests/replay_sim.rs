@@ -188,3 +188,59 @@ fn the_speed_bounded_twin_test_accepts_no_wrong_label_over_many_seeds() {
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
+
+/// Strokes begun before the world estimate was accepted are tracked once more with it: on the
+/// webcam rig's seed 1 the world is accepted after the boundary stroke has ended, and its
+/// re-tracked version (same id) has more tracked points and covers more of the true path than
+/// the first pass's, with no wrong label; the later strokes are the first pass's.
+#[test]
+fn strokes_begun_before_the_world_is_accepted_are_retracked() {
+    let (dir, reader, out, _) = track("webcam", 9.0, 1);
+    let first = replay(
+        &reader,
+        &ReplayConfig {
+            retrack_startup: false,
+            ..ReplayConfig::default()
+        },
+    )
+    .expect("replay");
+    let (accepted, _) = out.world_fit.expect("world accepted");
+    let true_strokes = reader.strokes().expect("truth").expect("simulated");
+    let boundary = &true_strokes[0];
+    assert!(boundary.end_time_ns < accepted, "{boundary:?}");
+    let ids = |o: &ReplayOutput| o.strokes.iter().map(|s| s.id).collect::<Vec<_>>();
+    assert_eq!(ids(&out), ids(&first));
+    let points = |o: &ReplayOutput| {
+        o.strokes
+            .iter()
+            .find(|s| s.id == 0)
+            .map_or(0, |s| s.raw_points)
+    };
+    assert!(
+        points(&out) > points(&first),
+        "{} vs {}",
+        points(&out),
+        points(&first)
+    );
+    let coverage = |o: &ReplayOutput| {
+        strokes_vs_truth(
+            &o.strokes,
+            &true_strokes[..1],
+            &StrokeCompareOptions::default(),
+        )[0]
+        .coverage_3mm
+        .unwrap_or(0.0)
+    };
+    assert!(
+        coverage(&out) > coverage(&first),
+        "{} vs {}",
+        coverage(&out),
+        coverage(&first)
+    );
+    for (a, b) in out.strokes.iter().zip(&first.strokes) {
+        if a.t_start_ns >= accepted {
+            assert_eq!(a, b);
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -109,6 +109,7 @@ mod tests {
     #[test]
     fn each_reason_has_its_counter_and_fractions_over_nothing_are_null() {
         let pair = |refusal| PairOutcome {
+            t_ns: 0,
             left_frame: 0,
             right_frame: 0,
             refusal,

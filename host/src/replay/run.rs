@@ -7,6 +7,7 @@ use fires_record::{Damage, FrameContent, FrameImage, RecordError, RecordingReade
 use super::imu_stream::{imu_stream, ImuStream};
 use crate::meta::{checked_pen_geometry, imu_scale, row_times_ns, stereo_rig, MetaError};
 
+use super::retrack;
 use crate::session::{Session, StrokeConfig};
 use crate::stereo::CameraId;
 use crate::track::fusion::{MagOffset, WorldFit, WorldReference};
@@ -30,6 +31,9 @@ pub struct ReplayConfig {
     pub world: WorldSource,
     /// The axis the tip is placed along; None: by the cameras, [`tip_axis_for`].
     pub tip_axis: Option<DirectionSource>,
+    /// Re-track the strokes begun before the online world estimate was accepted, once it is
+    /// (`replay/retrack.rs`).
+    pub retrack_startup: bool,
 }
 
 /// The tip's axis for cameras delivering `content`. Measured on 60 s sessions (the closing note
@@ -65,6 +69,7 @@ impl Default for ReplayConfig {
             window_margin_px: 24.0,
             world: WorldSource::default(),
             tip_axis: None,
+            retrack_startup: true,
         }
     }
 }
@@ -110,6 +115,8 @@ pub struct LabelPixels {
 /// One stereo pair's frames and why it gave no vision tip.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PairOutcome {
+    /// Time of the pair's sample, nanoseconds (left clock).
+    pub t_ns: u64,
     /// Index of the left frame.
     pub left_frame: u64,
     /// Index of the right frame.
@@ -214,9 +221,7 @@ pub fn replay(
         (None, Some(_)) => "configured",
         (None, None) => "estimated",
     };
-    let tracker = Tracker::new(stereo_rig(meta)?, tracker_cfg)
-        .map_err(|e| ReplayError::Tracker(e.to_string()))?;
-    let mut session = Session::new(tracker, config.strokes);
+    let rig = stereo_rig(meta)?;
 
     let mut events: Vec<Event> = (0..imu.samples.len()).map(Event::Imu).collect();
     let mut frames = [0usize; 2];
@@ -232,6 +237,100 @@ pub fn replay(
     }
     events.sort_by_key(|e| e.time(&imu));
 
+    let input = PassInput {
+        reader,
+        config,
+        imu: &imu,
+        events: &events,
+        images,
+    };
+    let mut pass = track_pass(&input, &rig, tracker_cfg.clone(), None, &mut times)?;
+    // Strokes begun before the world estimate was accepted: once more with that world.
+    if let (true, "estimated", Some((accepted_ns, fit))) =
+        (config.retrack_startup, world_reference, pass.world_fit)
+    {
+        if let Some(until) =
+            retrack::retrack_until(&imu.buttons, config.strokes.draw_button_mask, accepted_ns)
+        {
+            let cfg = TrackerConfig {
+                world: Some(fit.reference),
+                ..tracker_cfg
+            };
+            let second = track_pass(&input, &rig, cfg, Some(until), &mut times)?;
+            pass = retrack::splice(pass, second, accepted_ns);
+        }
+    }
+    let Pass {
+        samples,
+        display_tips,
+        label_pixels,
+        pairs,
+        unpaired_frames,
+        strokes,
+        world_fit,
+        mag_offset,
+    } = pass;
+    Ok(ReplayOutput {
+        samples,
+        display_tips,
+        label_pixels,
+        pairs,
+        unpaired_frames,
+        strokes,
+        display_filter: config.strokes.display.name(),
+        imu,
+        frames,
+        times,
+        wall_ns: wall.elapsed().as_nanos() as u64,
+        world_reference,
+        world_fit,
+        mag_offset,
+        damage: reader.damage(),
+    })
+}
+
+/// What every tracking pass of one replay reads.
+struct PassInput<'a> {
+    reader: &'a RecordingReader,
+    config: &'a ReplayConfig,
+    imu: &'a ImuStream,
+    /// IMU samples and camera frames in time order.
+    events: &'a [Event],
+    /// Per camera, whether it delivers images (else blob lists).
+    images: [bool; 2],
+}
+
+/// What one pass of the tracker over the events produced.
+pub(super) struct Pass {
+    pub(super) samples: Vec<TrackSample>,
+    pub(super) display_tips: Vec<Option<[f64; 3]>>,
+    pub(super) label_pixels: Vec<Option<LabelPixels>>,
+    pub(super) pairs: Vec<PairOutcome>,
+    pub(super) unpaired_frames: usize,
+    pub(super) strokes: Vec<fires_record::Stroke>,
+    pub(super) world_fit: Option<(u64, WorldFit)>,
+    pub(super) mag_offset: Option<MagOffset>,
+}
+
+/// One pass of a fresh tracker with `tracker_cfg` over the events up to `until_ns` (all of them
+/// when None), adding its stage times to `times`.
+fn track_pass(
+    input: &PassInput<'_>,
+    rig: &crate::stereo::StereoRig,
+    tracker_cfg: TrackerConfig,
+    until_ns: Option<u64>,
+    times: &mut StageTimes,
+) -> Result<Pass, ReplayError> {
+    let PassInput {
+        reader,
+        config,
+        imu,
+        events,
+        images,
+    } = *input;
+    let tracker =
+        Tracker::new(rig.clone(), tracker_cfg).map_err(|e| ReplayError::Tracker(e.to_string()))?;
+    let mut session = Session::new(tracker, config.strokes);
     let mut detectors = [
         BlobDetector::new(config.blobs),
         BlobDetector::new(config.blobs),
@@ -244,14 +343,17 @@ pub fn replay(
     let mut last: [LastFrame; 2] = [None, None];
     let mut buttons = imu.buttons.iter().peekable();
     for event in events {
-        let now = event.time(&imu);
+        let now = event.time(imu);
+        if until_ns.is_some_and(|u| now > u) {
+            break;
+        }
         while let Some(b) = buttons.next_if(|b| b.t_ns <= now) {
             session.button(*b);
         }
         match event {
             Event::Imu(i) => {
                 let t = Instant::now();
-                if let Some(s) = session.imu(&imu.samples[i]) {
+                if let Some(s) = session.imu(&imu.samples[*i]) {
                     samples.push(s.track);
                     display_tips.push(s.display_tip);
                     label_pixels.push(None);
@@ -259,10 +361,11 @@ pub fn replay(
                 times.track_ns += t.elapsed().as_nanos() as u64;
             }
             Event::Frame(id, f) => {
+                let id = *id;
                 let t = Instant::now();
                 let frame = camera_frame(
                     reader,
-                    &f,
+                    f,
                     id,
                     images[id as usize],
                     &mut detectors,
@@ -279,6 +382,7 @@ pub fn replay(
                     label_pixels.push(labelled_pixels(&s.track, &last));
                     if let (Some((l, _)), Some((r, _))) = (&last[0], &last[1]) {
                         pairs.push(PairOutcome {
+                            t_ns: s.track.t_ns,
                             left_frame: *l,
                             right_frame: *r,
                             refusal: session.tracker().last_refusal(),
@@ -296,24 +400,16 @@ pub fn replay(
     session.finish(samples.last().map_or(0, |s: &TrackSample| s.t_ns));
     let world_fit = session.tracker().world_fit().copied();
     let mag_offset = session.tracker().mag_offset().copied();
-    times.strokes_ns = session.strokes_ns();
-    let strokes = session.into_strokes();
-    Ok(ReplayOutput {
+    times.strokes_ns += session.strokes_ns();
+    Ok(Pass {
         samples,
         display_tips,
         label_pixels,
         pairs,
         unpaired_frames,
-        strokes,
-        display_filter: config.strokes.display.name(),
-        imu,
-        frames,
-        times,
-        wall_ns: wall.elapsed().as_nanos() as u64,
-        world_reference,
+        strokes: session.into_strokes(),
         world_fit,
         mag_offset,
-        damage: reader.damage(),
     })
 }
 

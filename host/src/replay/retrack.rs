@@ -1,0 +1,137 @@
+//! Start-up re-tracking: strokes drawn before the online world estimate was accepted are tracked
+//! once more with it.
+//!
+//! Until the world reference (gravity and the magnetic field in the camera frame) is known the
+//! tracker has no direction prior: it reports only the labellings the geometry alone decides and
+//! refuses the others (`world_not_accepted` in `report.json`), so the first strokes of a session,
+//! the boundary above all, come out with gaps. Once the estimate is accepted the replay runs a
+//! fresh tracker configured with it over the start of the recording, up to the end of the last
+//! stroke begun before the acceptance, and the strokes of that second pass replace the first
+//! versions (stroke ids count pen-downs, so a re-tracked stroke keeps its id; docs/strokes.md).
+//! The per-sample output (track, refusals, display) is spliced at the same time, so the report
+//! describes the strokes it lists.
+
+use super::run::Pass;
+use crate::link::ButtonChange;
+
+/// Time after the last re-tracked stroke's pen-up up to which the second pass runs, so that
+/// its pen-up is processed, nanoseconds.
+const MARGIN_NS: u64 = 200_000_000;
+
+/// The end of the re-tracked start: `MARGIN_NS` after the pen-up of the last stroke pressed
+/// (`draw_mask`) before `accepted_ns`, or the end of time when that stroke is never released;
+/// None when no stroke began before `accepted_ns`.
+pub(super) fn retrack_until(
+    buttons: &[ButtonChange],
+    draw_mask: u8,
+    accepted_ns: u64,
+) -> Option<u64> {
+    let mut drawing = false;
+    let mut until = None;
+    for b in buttons {
+        let pressed = b.buttons & draw_mask != 0;
+        if pressed == drawing {
+            continue;
+        }
+        drawing = pressed;
+        if pressed && b.t_ns < accepted_ns {
+            until = Some(u64::MAX);
+        } else if !pressed && until == Some(u64::MAX) {
+            until = Some(b.t_ns.saturating_add(MARGIN_NS));
+        }
+    }
+    until
+}
+
+/// The first pass with the start re-tracked, when the second pass tracked at least as many
+/// points of the strokes begun before `accepted_ns` (a direction prior from a world estimate
+/// still off by degrees can refuse frames the geometry alone labelled): its strokes begun
+/// before `accepted_ns` replace the first pass's of the same id (a stroke the second pass lost
+/// keeps its first version), and the per-sample output before the second pass's end is the
+/// second pass's. Otherwise the first pass unchanged.
+pub(super) fn splice(first: Pass, second: Pass, accepted_ns: u64) -> Pass {
+    let tracked = |p: &Pass| -> usize {
+        p.strokes
+            .iter()
+            .filter(|s| s.t_start_ns < accepted_ns)
+            .map(|s| s.raw_points)
+            .sum()
+    };
+    if tracked(&second) < tracked(&first) {
+        return first;
+    }
+    let cut = second
+        .samples
+        .last()
+        .map_or(0, |s| s.t_ns.saturating_add(1));
+    let retracked: Vec<fires_record::Stroke> = second
+        .strokes
+        .into_iter()
+        .filter(|s| s.t_start_ns < accepted_ns)
+        .collect();
+    let ids: Vec<u32> = retracked.iter().map(|s| s.id).collect();
+    let mut strokes: Vec<fires_record::Stroke> = first
+        .strokes
+        .into_iter()
+        .filter(|s| !ids.contains(&s.id))
+        .chain(retracked)
+        .collect();
+    strokes.sort_by_key(|s| s.id);
+    let keep = |t: u64| t >= cut;
+    let mut samples = second.samples;
+    let mut display_tips = second.display_tips;
+    let mut label_pixels = second.label_pixels;
+    for ((s, d), l) in first
+        .samples
+        .into_iter()
+        .zip(first.display_tips)
+        .zip(first.label_pixels)
+    {
+        if keep(s.t_ns) {
+            samples.push(s);
+            display_tips.push(d);
+            label_pixels.push(l);
+        }
+    }
+    let mut pairs = second.pairs;
+    pairs.extend(first.pairs.into_iter().filter(|p| keep(p.t_ns)));
+    Pass {
+        samples,
+        display_tips,
+        label_pixels,
+        pairs,
+        unpaired_frames: first.unpaired_frames,
+        strokes,
+        world_fit: first.world_fit,
+        mag_offset: first.mag_offset,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn change(t_ns: u64, buttons: u8) -> ButtonChange {
+        ButtonChange { t_ns, buttons }
+    }
+
+    #[test]
+    fn the_start_ends_after_the_last_stroke_begun_before_acceptance() {
+        let buttons = [
+            change(10, 1),
+            change(20, 0),
+            change(30, 1),
+            change(40, 3),
+            change(50, 0),
+            change(60, 1),
+            change(70, 0),
+        ];
+        // Button 2 alone does not draw; the press at 40 is still the stroke begun at 30.
+        assert_eq!(retrack_until(&buttons, 1, 35), Some(50 + MARGIN_NS));
+        assert_eq!(retrack_until(&buttons, 1, 15), Some(20 + MARGIN_NS));
+        assert_eq!(retrack_until(&buttons, 1, 5), None);
+        assert_eq!(retrack_until(&buttons, 2, 45), Some(50 + MARGIN_NS));
+        // Still drawing when the recording ends: the whole recording.
+        assert_eq!(retrack_until(&buttons[..4], 1, 35), Some(u64::MAX));
+    }
+}
