@@ -268,6 +268,10 @@ pub struct RefusalCounts {
     pub safety_pen_images: usize,
     /// Safety: a blob next to a labelled blob.
     pub safety_crowded: usize,
+    /// The other camera's labelled blobs could not be moved to the pair's time (no image velocity
+    /// yet) and its frame was exposed too long before: labels kept, no tip.
+    #[serde(default)]
+    pub unaligned: usize,
 }
 
 /// The decoder's counters and the bytes read: the `link` block, and the last line of `fires decode`.

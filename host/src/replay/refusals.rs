@@ -35,6 +35,7 @@ pub fn count(counts: &mut RefusalCounts, refusal: Refusal) {
         Refusal::Safety(Unsafe::PenImagesOverlap) => &mut counts.safety_pen_images,
         Refusal::Safety(Unsafe::BlobNotIsolated) => &mut counts.safety_crowded,
         Refusal::NoWorld => &mut counts.world_not_accepted,
+        Refusal::Unaligned => &mut counts.unaligned,
     };
     *c += 1;
 }

@@ -37,7 +37,7 @@ mod safety;
 mod tests;
 
 pub use config::{DirectionSource, TrackerConfig};
-pub use refusal::Refusal;
+pub use refusal::{Refusal, UNALIGNED_MAX_DT_NS};
 pub use safety::Unsafe;
 
 use super::fusion::{ImuSample, MagOffset, TipDeadReckoner, TipFilter, WorldFit, WorldReference};
@@ -384,6 +384,12 @@ impl Tracker {
         if let Some(why) = self.labels.check(&pair, &id, &vision, stale) {
             return self.refused(t, Refusal::Safety(why));
         }
+        // The first pair after a loss has no image velocities: if its frames are far apart in
+        // time, the labels are kept (the next pair moves the blobs with them) but not the tip.
+        if !self.other_blobs_aligned(this, t, &id) {
+            self.remember_labels(this, t, &id, &vision);
+            return self.refused(t, Refusal::Unaligned);
+        }
         // Fusion and the sample.
         self.vision_sample(this, t, &id, vision)
     }
@@ -418,6 +424,30 @@ impl Tracker {
             gate_px: self.config.correspondence.max_epipolar_px,
         };
         complete_merged(&pair, &options)
+    }
+
+    /// True when the labelled blobs of the other camera were moved to the pair's time `t`, or
+    /// its frame was exposed within [`UNALIGNED_MAX_DT_NS`] of `t` (or alignment is off).
+    fn other_blobs_aligned(&self, this: usize, t: u64, id: &Identification) -> bool {
+        let near = self
+            .align
+            .current(1 - this)
+            .is_none_or(|f| f.t_ns.abs_diff(t) <= UNALIGNED_MAX_DT_NS);
+        if !self.config.time_align || near {
+            return true;
+        }
+        let cands = &self.correspondences.candidates;
+        id.assignment.iter().flatten().all(|&k| {
+            let blob = if this == 0 {
+                cands[k].right
+            } else {
+                cands[k].left
+            };
+            self.points
+                .aligned_velocity
+                .get(blob)
+                .is_some_and(Option::is_some)
+        })
     }
 
     /// Fusion and output of a labelled pair: world estimate, clock offset, direction filter, the

@@ -310,6 +310,10 @@ impl TimeAlignment {
                     .then(|| [(b[0] - q[0]) / dt, (b[1] - q[1]) / dt])
             });
             let v = measured.or_else(|| {
+                // One pose predicts no motion: the blob is not moved, and says so (None).
+                if !self.pen_velocity_known() {
+                    return None;
+                }
                 let (a, c) = (project(at_frame, k)?, project(at_target, k)?);
                 Some([(c[0] - a[0]) / step, (c[1] - a[1]) / step])
             });
@@ -390,6 +394,14 @@ impl TimeAlignment {
             .ok()
     }
 
+    /// True when the last two vision poses give the pen's velocity (not one pose alone).
+    fn pen_velocity_known(&self) -> bool {
+        matches!(
+            (self.pen_history[0], self.pen_history[1]),
+            (Some((t1, _)), Some((t0, _))) if t1 > t0 && t1 - t0 <= 100_000_000
+        )
+    }
+
     /// All four LED positions at `t` from the last two vision poses (constant velocity), or None
     /// without a recent pose.
     pub(super) fn predicted_leds(&self, t: u64) -> Option<[Vector3<f64>; LED_COUNT]> {
@@ -399,7 +411,7 @@ impl TimeAlignment {
         }
         let dt = (t as f64 - t1 as f64) * 1e-9;
         let velocity = |k: usize| match self.pen_history[1] {
-            Some((t0, p0)) if t1 > t0 && t1 - t0 <= 100_000_000 => {
+            Some((t0, p0)) if self.pen_velocity_known() => {
                 (p1[k] - p0[k]) / ((t1 - t0) as f64 * 1e-9)
             }
             _ => Vector3::zeros(),

@@ -21,7 +21,19 @@ pub enum Refusal {
     Safety(Unsafe),
     /// A labelling with fewer than four LEDs before the world reference is accepted.
     NoWorld,
+    /// A labelling whose other-camera blobs could not be moved to the pair's time (no image
+    /// velocity yet, the first pair after a loss) from a frame exposed more than
+    /// [`UNALIGNED_MAX_DT_NS`] before or after: kept for continuity, but its stereo is stale.
+    Unaligned,
 }
+
+/// The longest time between a pair's two exposures over which blobs that could not be moved
+/// are still triangulated together, nanoseconds. Free-running 60 Hz and 30 Hz webcams pair frames
+/// up to 17 and 33 ms apart, over which a quickly drawn pen moves 5-10 mm: such a pair waits for
+/// image velocities (webcam seed 3: a 13-18 mm excursion in the boundary stroke; stress seed 3:
+/// two wrong labels). Pairs of the 100 Hz blob cameras lie within about half their period and
+/// are not delayed.
+pub const UNALIGNED_MAX_DT_NS: u64 = 6_000_000;
 
 /// The reason for a pair with `blobs` per camera and `candidates` stereo candidates refused at
 /// `stage`.

@@ -158,9 +158,12 @@ impl LabelGuard {
 
     /// The labelled LEDs whose image, in either camera, lies within reach of another LED's image
     /// (labelled or not, from the labelled pen's model): closer than `min_image_separation_px`,
-    /// or than [`MERGE_MARGIN`] times twice the largest labelled blob radius of that camera. Two
-    /// bright spots whose thresholded discs touch are detected as one blob half-way between
-    /// them, which would be labelled as one of the two LEDs. None when the pen model is unknown.
+    /// or than [`MERGE_MARGIN`] times the sum of the two LEDs' blob radii in that camera (an
+    /// unlabelled LED's taken as the largest labelled one's, so a spot nearer the camera is not
+    /// underestimated). Two bright spots whose thresholded discs touch are detected as one blob
+    /// half-way between them, which would be labelled as one of the two LEDs; a labelled blob
+    /// that is such a merge is itself wide, so its own radius flags it. None when the pen model
+    /// is unknown.
     pub(super) fn merged_leds(
         &self,
         pair: &PairView<'_>,
@@ -174,18 +177,16 @@ impl LabelGuard {
         let mut merged = [false; LED_COUNT];
         for camera in [CameraId::Left, CameraId::Right] {
             let cam = usize::from(camera == CameraId::Right);
-            let largest = pair.align.current(cam).map_or(0.0, |frame| {
-                id.assignment
-                    .iter()
-                    .flatten()
-                    .filter_map(|&k| pair.candidates.get(k))
-                    .map(|k| if cam == 0 { k.left } else { k.right })
-                    .filter_map(|b| frame.radii.get(b).copied())
-                    .fold(0.0, f64::max)
+            // The radius of each labelled LED's blob in this camera.
+            let radius: [Option<f64>; LED_COUNT] = std::array::from_fn(|k| {
+                let frame = pair.align.current(cam)?;
+                let c = pair.candidates.get(id.assignment[k]?)?;
+                frame
+                    .radii
+                    .get(if cam == 0 { c.left } else { c.right })
+                    .copied()
             });
-            let min = self
-                .min_image_separation_px
-                .max(MERGE_MARGIN * 2.0 * largest);
+            let largest = radius.iter().flatten().copied().fold(0.0, f64::max);
             let px: Vec<Option<[f64; 2]>> = leds
                 .iter()
                 .map(|p| pair.rig.project(camera, p).ok())
@@ -198,7 +199,11 @@ impl LabelGuard {
                     *flag = true;
                     continue;
                 };
+                let r_k = radius[k].unwrap_or(largest);
                 let near = px.iter().enumerate().any(|(j, b)| {
+                    let min = self
+                        .min_image_separation_px
+                        .max(MERGE_MARGIN * (r_k + radius[j].unwrap_or(largest)));
                     j != k && b.is_some_and(|b| (a[0] - b[0]).hypot(a[1] - b[1]) < min)
                 });
                 *flag |= near;
@@ -406,6 +411,37 @@ mod tests {
                 let blobs = s.align.current(cam).unwrap().blobs.clone();
                 let radii = vec![reach * factor; blobs.len()];
                 s.align.push(cam, 1_000, blobs, radii);
+            }
+            assert_eq!(
+                guard.pen_images_separated(&s.view(), &s.estimate(), &labelled(4)),
+                safe,
+                "radius {factor} x reach"
+            );
+        }
+    }
+
+    /// Each pair of LED images is compared with its own two blobs' radii: LED 1's spot five
+    /// times wider than the others (nearer the camera, brighter) does not make LEDs 2 and 3,
+    /// the closest pair, merge, while a largest-radius rule would; grown over their reach, LEDs
+    /// 2 and 3 do.
+    #[test]
+    fn a_wide_spot_does_not_merge_its_neighbours() {
+        let guard = LabelGuard::new(&TrackerConfig::default());
+        let mut s = Scene::new(pen(Vector3::new(0.05, 0.0, 0.7), Vector3::x()));
+        let gap = |b: &[[f64; 2]], i: usize, j: usize| (b[i][0] - b[j][0]).hypot(b[i][1] - b[j][1]);
+        let blobs = [0, 1].map(|cam| s.align.current(cam).unwrap().blobs.clone());
+        let closest = blobs
+            .iter()
+            .map(|b| gap(b, 1, 2))
+            .fold(f64::INFINITY, f64::min);
+        assert!(blobs.iter().all(|b| gap(b, 0, 1) > 1.6 * closest));
+        let reach = closest / (2.0 * MERGE_MARGIN);
+        for (factor, safe) in [(0.95, true), (1.05, false)] {
+            for (cam, b) in blobs.iter().enumerate() {
+                let mut radii = vec![reach * factor; LED_COUNT];
+                radii[0] = 0.8 * closest;
+                assert!(MERGE_MARGIN * 2.0 * radii[0] > closest);
+                s.align.push(cam, 1_000, b.clone(), radii);
             }
             assert_eq!(
                 guard.pen_images_separated(&s.view(), &s.estimate(), &labelled(4)),

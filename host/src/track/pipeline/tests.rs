@@ -708,3 +708,47 @@ fn the_search_window_covers_the_unlabelled_leds() {
         }
     }
 }
+
+/// The first pair of a session has no image velocities, so the other camera's blobs stay where
+/// they were exposed: 8 ms before, a moving pen's stereo is stale and the pair keeps its labels
+/// but gives no tip (`Unaligned`), as does the second (the other camera's one frame has no
+/// velocity yet, one pose predicts no motion); from the third on the blobs are moved with the
+/// velocities the labels give, and the pairs give tips. Frames 1 ms apart give a tip at once
+/// (the second pair, 16 ms apart, waits as well).
+#[test]
+fn the_first_pair_far_apart_in_time_keeps_labels_but_gives_no_tip() {
+    let rig = StereoRig::parallel(1024, 768, 45f64.to_radians(), 0.25);
+    let pen = PenGeometry::thesis();
+    let motion = PenMotion::drawing();
+    let frame = |t: u64, cam: CameraId, rng: &mut SplitMix64| {
+        let proj = project_leds(&rig, &pen, &motion.pose(t as f64 * 1e-9), 0.0, rng);
+        let c = usize::from(cam == CameraId::Right);
+        CameraFrame::new(cam, t, proj[c].iter().flatten().copied().collect())
+    };
+    let cfg = TrackerConfig {
+        world: Some(WorldReference::default()),
+        ..TrackerConfig::default()
+    };
+    let unaligned = Some(Refusal::Unaligned);
+    for (delay, first) in [
+        (8_000_000u64, [unaligned; 2]),
+        (1_000_000, [None, unaligned]),
+    ] {
+        let mut rng = SplitMix64::new(5);
+        let mut tracker = Tracker::new(rig.clone(), cfg.clone()).unwrap();
+        let mut refusals = Vec::new();
+        for k in 1..6u64 {
+            let t = 500_000_000 + k * 16_666_667;
+            for (cam, t) in [(CameraId::Left, t), (CameraId::Right, t + delay)] {
+                if tracker.push_frame(frame(t, cam, &mut rng)).is_some() {
+                    refusals.push(tracker.last_refusal());
+                }
+            }
+        }
+        assert_eq!(refusals[..2], first, "{delay} ns: {refusals:?}");
+        assert!(
+            refusals[2..].iter().all(Option::is_none),
+            "{delay} ns: {refusals:?}"
+        );
+    }
+}
