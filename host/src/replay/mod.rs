@@ -15,7 +15,7 @@ pub mod plot;
 pub mod plot_text;
 pub mod refusals;
 pub mod report;
-mod retrack;
+pub(crate) mod retrack;
 pub mod run;
 pub mod strokes_vs_truth;
 

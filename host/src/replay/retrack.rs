@@ -21,7 +21,7 @@ const MARGIN_NS: u64 = 200_000_000;
 /// The end of the re-tracked start: `MARGIN_NS` after the pen-up of the last stroke pressed
 /// (`draw_mask`) before `accepted_ns`, or the end of time when that stroke is never released;
 /// None when no stroke began before `accepted_ns`.
-pub(super) fn retrack_until(
+pub(crate) fn retrack_until(
     buttons: &[ButtonChange],
     draw_mask: u8,
     accepted_ns: u64,
@@ -43,40 +43,57 @@ pub(super) fn retrack_until(
     until
 }
 
-/// The first pass with the start re-tracked, when the second pass tracked at least as many
-/// points of the strokes begun before `accepted_ns` (a direction prior from a world estimate
-/// still off by degrees can refuse frames the geometry alone labelled): its strokes begun
-/// before `accepted_ns` replace the first pass's of the same id (a stroke the second pass lost
-/// keeps its first version), and the per-sample output before the second pass's end is the
-/// second pass's. Otherwise the first pass unchanged.
-pub(super) fn splice(first: Pass, second: Pass, accepted_ns: u64) -> Pass {
-    let tracked = |p: &Pass| -> usize {
-        p.strokes
+/// True when the second pass tracked at least as many points of the strokes begun before
+/// `accepted_ns` as the first (a direction prior from a world estimate still off by degrees can
+/// refuse frames the geometry alone labelled).
+pub(crate) fn second_is_better(
+    first: &[fires_record::Stroke],
+    second: &[fires_record::Stroke],
+    accepted_ns: u64,
+) -> bool {
+    let tracked = |strokes: &[fires_record::Stroke]| -> usize {
+        strokes
             .iter()
             .filter(|s| s.t_start_ns < accepted_ns)
             .map(|s| s.raw_points)
             .sum()
     };
-    if tracked(&second) < tracked(&first) {
+    tracked(second) >= tracked(first)
+}
+
+/// The strokes with the second pass's begun before `accepted_ns` in place of the first pass's of
+/// the same id (a stroke the second pass lost keeps its first version), in id order.
+pub(crate) fn replace_strokes(
+    first: Vec<fires_record::Stroke>,
+    second: Vec<fires_record::Stroke>,
+    accepted_ns: u64,
+) -> Vec<fires_record::Stroke> {
+    let retracked: Vec<fires_record::Stroke> = second
+        .into_iter()
+        .filter(|s| s.t_start_ns < accepted_ns)
+        .collect();
+    let ids: Vec<u32> = retracked.iter().map(|s| s.id).collect();
+    let mut strokes: Vec<fires_record::Stroke> = first
+        .into_iter()
+        .filter(|s| !ids.contains(&s.id))
+        .chain(retracked)
+        .collect();
+    strokes.sort_by_key(|s| s.id);
+    strokes
+}
+
+/// The first pass with the start re-tracked, when [`second_is_better`]: the strokes as
+/// [`replace_strokes`], and the per-sample output before the second pass's end the second
+/// pass's. Otherwise the first pass unchanged.
+pub(super) fn splice(first: Pass, second: Pass, accepted_ns: u64) -> Pass {
+    if !second_is_better(&first.strokes, &second.strokes, accepted_ns) {
         return first;
     }
     let cut = second
         .samples
         .last()
         .map_or(0, |s| s.t_ns.saturating_add(1));
-    let retracked: Vec<fires_record::Stroke> = second
-        .strokes
-        .into_iter()
-        .filter(|s| s.t_start_ns < accepted_ns)
-        .collect();
-    let ids: Vec<u32> = retracked.iter().map(|s| s.id).collect();
-    let mut strokes: Vec<fires_record::Stroke> = first
-        .strokes
-        .into_iter()
-        .filter(|s| !ids.contains(&s.id))
-        .chain(retracked)
-        .collect();
-    strokes.sort_by_key(|s| s.id);
+    let strokes = replace_strokes(first.strokes, second.strokes, accepted_ns);
     let keep = |t: u64| t >= cut;
     let mut samples = second.samples;
     let mut display_tips = second.display_tips;

@@ -37,6 +37,9 @@ use crate::stereo::CameraId;
 use crate::track::fusion::ImuSample;
 use crate::track::pipeline::{CameraFrame, TrackQuality, Tracker, TrackerConfig};
 use crate::vision::{BlobConfig, BlobDetector, GrayImage};
+use start::StartBuffer;
+
+mod start;
 
 /// What the live loop needs besides its sources.
 #[derive(Clone, Debug)]
@@ -171,8 +174,10 @@ pub fn run_live(
     let mut tracker_cfg = cfg.tracker.clone();
     tracker_cfg.pen = checked_pen_geometry(&meta, tracker_cfg.identify.tolerance)
         .map_err(|e| LiveError::Tracker(e.to_string()))?;
-    let tracker = Tracker::new(rig, tracker_cfg).map_err(|e| LiveError::Tracker(e.to_string()))?;
+    let tracker = Tracker::new(rig.clone(), tracker_cfg.clone())
+        .map_err(|e| LiveError::Tracker(e.to_string()))?;
     let mut session = Session::new(tracker, cfg.strokes);
+    let mut start_buffer = StartBuffer::new(rig, tracker_cfg, cfg.strokes);
     let mut timer = LiveImuTimer::new(meta.link.baud, meta.link.sample_rate_hz, imu_scale(&meta));
     let mut link = SerialLink::open(cfg.serial.clone(), clock)?;
     let (tx, rx) = mpsc::channel::<Msg>();
@@ -355,7 +360,10 @@ pub fn run_live(
             failure.get_or_insert(e);
         }
         while let Some(e) = reorder.pop_ready() {
+            let t = e.t_ns();
+            start_buffer.keep(&e);
             track_event(&mut session, e, &mut summary, &mut out.samples);
+            start_buffer.update(session.tracker(), t);
         }
     }
     join_all(threads);
@@ -365,13 +373,17 @@ pub fn run_live(
         reorder.push(e.into());
     }
     while let Some(e) = reorder.pop() {
+        let t = e.t_ns();
+        start_buffer.keep(&e);
         track_event(&mut session, e, &mut summary, &mut out.samples);
+        start_buffer.update(session.tracker(), t);
     }
     summary.world = session.tracker().world().copied();
     summary.world_fit = session.tracker().world_fit().map(|(_, f)| *f);
     summary.mag_offset = session.tracker().mag_offset().copied();
     session.finish(out.samples.last().map_or(0, |s| s.track.t_ns));
-    out.strokes = session.into_strokes();
+    // The strokes begun before the world estimate was accepted, re-tracked with it.
+    out.strokes = start_buffer.finish(session.into_strokes());
     summary.strokes = out.strokes.len() as u64;
     summary.link.stats = timer.stats();
     summary.seconds = start.elapsed().as_secs_f64();
