@@ -143,7 +143,10 @@ impl Identifier {
                 let rel = [blob[0] - m[0][0], blob[1] - m[0][1]];
                 let along = (rel[0] * d[0] + rel[1] * d[1]) / (len * len);
                 let perp_px = (rel[0] * d[1] - rel[1] * d[0]).abs() / len * f;
-                if perp_px > self.config.image_line_px || !(-0.6..=1.6).contains(&along) {
+                // The line is searched one pen length beyond either end (in units of the LED
+                // 1-4 image segment): a labelling shifted by one LED leaves the real end LED
+                // there, and perspective can put it past 1.6 when the pen recedes.
+                if perp_px > self.config.image_line_px || !(-1.0..=2.0).contains(&along) {
                     continue;
                 }
                 let near_led = (0..LED_COUNT).any(|i| {

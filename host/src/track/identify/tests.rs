@@ -206,3 +206,38 @@ fn interference_never_yields_a_wrong_label() {
     assert_eq!(wrong, 0);
     assert!(labelled as f64 > 0.9 * frames as f64, "{labelled}/{frames}");
 }
+
+/// A stereo pair stretched by a stale time alignment can make LEDs 1-3 look like LEDs 1, 3 and 4
+/// (110 and 50 mm apart); the true LED 4's blob then lies on the pen's image line beyond the
+/// labelled LED 4, 1.64 of the labelled LED 1-4 segment from LED 1 when the pen recedes (stress
+/// seed 16). The image evidence looks that far along the line, so the labelling is refused; the
+/// same points without that blob are labelled.
+#[test]
+fn a_blob_beyond_the_labelled_pen_refuses_a_shifted_labelling() {
+    let rig = crate::stereo::StereoRig::parallel(1024, 768, 45f64.to_radians(), 0.25);
+    let mut id = Identifier::new(PenGeometry::thesis(), IdentifyConfig::default())
+        .unwrap()
+        .with_rig(&rig, 0.5);
+    // The pen across the view: the labelled LEDs 1, 3, 4 at 0, 110 and 160 mm along x, and the
+    // unlabelled blob at 262 mm (1.64 x 160).
+    let at = |s: f64| Vector3::new(-0.08 + s, 0.02, 0.7);
+    let points = [at(0.0), at(0.110), at(0.160)];
+    let norm = |p: &Vector3<f64>| {
+        let q = [(p.x / p.z, p.y / p.z), ((p.x - 0.25) / p.z, p.y / p.z)];
+        q.map(|(x, y)| [x, y])
+    };
+    let cands = candidates(&points);
+    let mut left: Vec<[f64; 2]> = points.iter().map(|p| norm(p)[0]).collect();
+    let mut right: Vec<[f64; 2]> = points.iter().map(|p| norm(p)[1]).collect();
+    let prior = IdentifyPrior::default();
+    let labelled = id
+        .identify_with_images(&cands, &prior, &left, &right)
+        .expect("labelled without the extra blob");
+    assert_eq!(labelled.assignment, [Some(0), None, Some(1), Some(2)]);
+    left.push(norm(&at(0.262))[0]);
+    right.push(norm(&at(0.262))[1]);
+    assert_eq!(
+        id.identify_with_images(&cands, &prior, &left, &right),
+        Err(IdentifyError::ContradictedByImage)
+    );
+}
