@@ -11,9 +11,11 @@
 //!    undistorted.
 //! 3. *Stereo*: epipolar and ray-gap gates and triangulation ([`crate::stereo::correspond`]).
 //! 4. *Identification* ([`super::identify`]) with the fused direction and the previous labels as
-//!    priors (`pipeline/prior.rs`).
+//!    priors (`pipeline/prior.rs`); a pair refused with two LED spots merged in one camera can
+//!    still be labelled from the other camera and the pen's rigid line (`pipeline/merged.rs`).
 //! 5. *Safety*: the tracker's own checks of the labelling, on the labelled pen's eq. 4.13 model
-//!    along the vision axis (`pipeline/safety.rs`).
+//!    along the vision axis (`pipeline/safety.rs`); the first pair after a loss whose frames are
+//!    far apart in time keeps its labels but gives no tip (its blobs could not be moved).
 //! 6. *Tip* with eq. 4.13 ([`super::tip`]) along the fused axis or the vision axis.
 //! 7. *Fusion*: the vision axis corrects the direction filter at the frame time and may complete
 //!    the online world estimate; the tip filter smooths the tip.
@@ -50,7 +52,6 @@ use crate::stereo::{CameraId, Correspondences, StereoRig, Triangulator};
 use crate::vision::Rect;
 use align::{AlignOptions, PairPoints, TimeAlignment};
 use clock_offset::{ClockOffsetEstimator, ClockOptions};
-use merged::{complete_merged, MergedOptions};
 use nalgebra::Vector3;
 use prior::DirectionPrior;
 use safety::{LabelGuard, PairView};
@@ -344,7 +345,7 @@ impl Tracker {
                     IdentifyError::ContradictedByImage => RefusedBy::ImageEvidence,
                     IdentifyError::Ambiguous => RefusedBy::Rival,
                 });
-                match self.complete_merged(t, by) {
+                match self.complete_merged_pair(t, by) {
                     Some(id) => id,
                     None => return self.refused(t, Refusal::Identify(by)),
                 }
@@ -394,60 +395,21 @@ impl Tracker {
         self.vision_sample(this, t, &id, vision)
     }
 
-    /// The labelling of a pair whose identification was refused for want of LEDs or for a blob
-    /// its pen did not explain (not for a conflict: a rival, a twin, an identity swap or the
-    /// fused direction), when two
-    /// triangulated LEDs and the images of the other two, merged with a neighbour's spot in one
-    /// camera, explain the pen uniquely (`pipeline/merged.rs`).
-    fn complete_merged(&self, t: u64, refused_by: RefusedBy) -> Option<Identification> {
-        let conflict = matches!(
-            refused_by,
-            RefusedBy::Twin
-                | RefusedBy::Rival
-                | RefusedBy::TradingPlaces
-                | RefusedBy::DirectionPrior
-        );
-        if conflict || self.correspondences.candidates.len() < 2 {
-            return None;
-        }
-        let pair = PairView {
-            rig: &self.rig,
-            align: &self.align,
-            points: &self.points,
-            candidates: &self.correspondences.candidates,
-            tip: &self.tip,
-            t,
-        };
-        let options = MergedOptions {
-            led_offsets: self.config.pen.led_offsets,
-            tolerance: self.config.identify.tolerance,
-            gate_px: self.config.correspondence.max_epipolar_px,
-        };
-        complete_merged(&pair, &options)
-    }
-
     /// True when the labelled blobs of the other camera were moved to the pair's time `t`, or
     /// its frame was exposed within [`UNALIGNED_MAX_DT_NS`] of `t` (or alignment is off).
     fn other_blobs_aligned(&self, this: usize, t: u64, id: &Identification) -> bool {
-        let near = self
-            .align
-            .current(1 - this)
-            .is_none_or(|f| f.t_ns.abs_diff(t) <= UNALIGNED_MAX_DT_NS);
-        if !self.config.time_align || near {
-            return true;
-        }
         let cands = &self.correspondences.candidates;
-        id.assignment.iter().flatten().all(|&k| {
-            let blob = if this == 0 {
+        let blobs = id.assignment.iter().flatten().map(|&k| {
+            if this == 0 {
                 cands[k].right
             } else {
                 cands[k].left
-            };
-            self.points
-                .aligned_velocity
-                .get(blob)
-                .is_some_and(Option::is_some)
-        })
+            }
+        });
+        !self.config.time_align
+            || self
+                .align
+                .other_moved(&self.points, this, t, UNALIGNED_MAX_DT_NS, blobs)
     }
 
     /// Fusion and output of a labelled pair: world estimate, clock offset, direction filter, the

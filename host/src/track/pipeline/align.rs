@@ -394,6 +394,22 @@ impl TimeAlignment {
             .ok()
     }
 
+    /// True when the pair's other camera (of `this`) was exposed within `max_dt_ns` of `t`, or
+    /// every one of its `blobs` was moved to `t` with an image velocity.
+    pub(super) fn other_moved(
+        &self,
+        points: &PairPoints,
+        this: usize,
+        t: u64,
+        max_dt_ns: u64,
+        mut blobs: impl Iterator<Item = usize>,
+    ) -> bool {
+        let near = self
+            .current(1 - this)
+            .is_none_or(|f| f.t_ns.abs_diff(t) <= max_dt_ns);
+        near || blobs.all(|b| points.aligned_velocity.get(b).is_some_and(Option::is_some))
+    }
+
     /// True when the last two vision poses give the pen's velocity (not one pose alone).
     fn pen_velocity_known(&self) -> bool {
         matches!(

@@ -24,8 +24,9 @@
 //! tracker report the labelling as a located four-LED pattern.
 
 use super::safety::{PairView, MERGE_MARGIN};
+use super::Tracker;
 use crate::stereo::{CameraId, Candidate};
-use crate::track::identify::{Identification, Resolution};
+use crate::track::identify::{Identification, RefusedBy, Resolution};
 use crate::track::pen::LED_COUNT;
 use nalgebra::Vector3;
 
@@ -38,6 +39,43 @@ pub(super) struct MergedOptions {
     pub(super) tolerance: f64,
     /// Largest distance of an LED's own blob from its predicted image, pixels.
     pub(super) gate_px: f64,
+}
+
+impl Tracker {
+    /// The labelling of a pair whose identification was refused for want of LEDs or for a blob
+    /// its pen did not explain (not for a conflict: a rival, a twin, an identity swap or the
+    /// fused direction), when two triangulated LEDs and the images of the other two, merged
+    /// with a neighbour's spot in one camera, explain the pen uniquely (`pipeline/merged.rs`).
+    pub(super) fn complete_merged_pair(
+        &self,
+        t: u64,
+        refused_by: RefusedBy,
+    ) -> Option<Identification> {
+        let conflict = matches!(
+            refused_by,
+            RefusedBy::Twin
+                | RefusedBy::Rival
+                | RefusedBy::TradingPlaces
+                | RefusedBy::DirectionPrior
+        );
+        if conflict || self.correspondences.candidates.len() < 2 {
+            return None;
+        }
+        let pair = PairView {
+            rig: &self.rig,
+            align: &self.align,
+            points: &self.points,
+            candidates: &self.correspondences.candidates,
+            tip: &self.tip,
+            t,
+        };
+        let options = MergedOptions {
+            led_offsets: self.config.pen.led_offsets,
+            tolerance: self.config.identify.tolerance,
+            gate_px: self.config.correspondence.max_epipolar_px,
+        };
+        complete_merged(&pair, &options)
+    }
 }
 
 /// One pen pose that explains both images: per LED, the candidate (triangulated LEDs) and the
