@@ -415,6 +415,18 @@ impl From<TimedLinkEvent> for Event {
 }
 
 impl Event {
+    /// Feeds the event to `session`; returns the sample it produced, if any.
+    fn feed(self, session: &mut Session) -> Option<SessionSample> {
+        match self {
+            Event::Button(b) => {
+                session.button(b);
+                None
+            }
+            Event::Imu(i) => session.imu(&i),
+            Event::Frame(f) => session.frame(f),
+        }
+    }
+
     fn t_ns(&self) -> u64 {
         match self {
             Event::Imu(s) => s.t_ns,
@@ -493,27 +505,16 @@ fn track_event(
     summary: &mut LiveSummary,
     samples: &mut Vec<SessionSample>,
 ) {
-    let s = match e {
-        Event::Button(b) => {
-            session.button(b);
-            return;
+    let (imu, frame) = (matches!(e, Event::Imu(_)), matches!(e, Event::Frame(_)));
+    let s = e.feed(session);
+    summary.imu_samples += u64::from(imu);
+    if let (true, Some(s)) = (frame, &s) {
+        summary.samples += 1;
+        if matches!(s.track.quality, TrackQuality::Vision { .. }) {
+            summary.samples_vision += 1;
+            summary.last_tip_m = s.track.tip;
         }
-        Event::Imu(i) => {
-            summary.imu_samples += 1;
-            session.imu(&i)
-        }
-        Event::Frame(f) => {
-            let s = session.frame(f);
-            if let Some(s) = &s {
-                summary.samples += 1;
-                if matches!(s.track.quality, TrackQuality::Vision { .. }) {
-                    summary.samples_vision += 1;
-                    summary.last_tip_m = s.track.tip;
-                }
-            }
-            s
-        }
-    };
+    }
     samples.extend(s);
 }
 

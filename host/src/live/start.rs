@@ -140,17 +140,7 @@ impl StartBuffer {
         let mut last = 0;
         for e in std::mem::take(&mut self.events) {
             last = e.t_ns();
-            match e {
-                Event::Button(b) => {
-                    session.button(b);
-                }
-                Event::Imu(s) => {
-                    session.imu(&s);
-                }
-                Event::Frame(f) => {
-                    session.frame(f);
-                }
-            }
+            e.feed(&mut session);
         }
         session.finish(last);
         self.state = State::Done(Some((accepted_ns, session.into_strokes())));
@@ -234,17 +224,7 @@ mod tests {
         for e in events {
             let t = e.t_ns();
             start.keep(&e);
-            match e {
-                Event::Button(b) => {
-                    live.button(b);
-                }
-                Event::Imu(s) => {
-                    live.imu(&s);
-                }
-                Event::Frame(f) => {
-                    live.frame(f);
-                }
-            }
+            e.feed(&mut live);
             start.update(live.tracker(), t);
         }
         let (accepted, _) = *live.tracker().world_fit().expect("world accepted");

@@ -260,31 +260,21 @@ pub fn replay(
             pass = retrack::splice(pass, second, accepted_ns);
         }
     }
-    let Pass {
-        samples,
-        display_tips,
-        label_pixels,
-        pairs,
-        unpaired_frames,
-        strokes,
-        world_fit,
-        mag_offset,
-    } = pass;
     Ok(ReplayOutput {
-        samples,
-        display_tips,
-        label_pixels,
-        pairs,
-        unpaired_frames,
-        strokes,
+        samples: pass.samples,
+        display_tips: pass.display_tips,
+        label_pixels: pass.label_pixels,
+        pairs: pass.pairs,
+        unpaired_frames: pass.unpaired_frames,
+        strokes: pass.strokes,
         display_filter: config.strokes.display.name(),
         imu,
         frames,
         times,
         wall_ns: wall.elapsed().as_nanos() as u64,
         world_reference,
-        world_fit,
-        mag_offset,
+        world_fit: pass.world_fit,
+        mag_offset: pass.mag_offset,
         damage: reader.damage(),
     })
 }

@@ -112,7 +112,7 @@ pub(super) fn complete_merged(
                     };
                     match &found {
                         None => found = Some(c),
-                        Some(f) if same_labelling(f, &c) => {}
+                        Some(f) if f.blobs == c.blobs => {}
                         Some(_) => return None,
                     }
                 }
@@ -139,11 +139,6 @@ pub(super) fn complete_merged(
         interference,
         completed,
     })
-}
-
-/// Two labellings that assign the same blobs to the same LEDs.
-fn same_labelling(x: &Completion, y: &Completion) -> bool {
-    x.blobs == y.blobs
 }
 
 /// The pen with LED `a` at candidate `i` and LED `b` at candidate `j` (`seeds`), if every other

@@ -618,6 +618,16 @@ fn merged_spot_scene(
     (rig, pen, leds, left_frame, right_frame)
 }
 
+/// A tracker for a merged-spot scene's rig and pen (one pair, so no time alignment).
+fn merged_tracker(rig: &StereoRig, pen: PenGeometry) -> Tracker {
+    let cfg = TrackerConfig {
+        pen,
+        time_align: false,
+        ..TrackerConfig::default()
+    };
+    Tracker::new(rig.clone(), cfg).unwrap()
+}
+
 /// The merged blob lies on neither LED's epipolar line, so only LEDs 1 and 4 triangulate; the
 /// left image and the merged blob still explain LEDs 2 and 3 where that pen puts them, so the
 /// frame is labelled (LEDs 1 and 4, the others completed) and its tip is exact, even before a
@@ -626,12 +636,7 @@ fn merged_spot_scene(
 fn leds_merged_in_one_camera_are_completed_from_the_other() {
     let t = 1_000_000;
     let (rig, pen, leds, left, right) = merged_spot_scene(t, 1);
-    let cfg = TrackerConfig {
-        pen,
-        time_align: false,
-        ..TrackerConfig::default()
-    };
-    let mut tracker = Tracker::new(rig, cfg).unwrap();
+    let mut tracker = merged_tracker(&rig, pen);
     assert!(tracker.push_frame(left).is_none());
     let s = tracker.push_frame(right).unwrap();
     assert_eq!(
@@ -656,18 +661,13 @@ fn leds_merged_in_one_camera_are_completed_from_the_other() {
 fn an_unexplained_merge_is_not_completed() {
     let t = 1_000_000;
     let (rig, pen, _, left, right) = merged_spot_scene(t, 1);
-    let cfg = TrackerConfig {
-        pen,
-        time_align: false,
-        ..TrackerConfig::default()
-    };
     let mut missing = right.clone();
     missing.blobs.remove(1);
     missing.radii.remove(1);
     let mut shifted = right.clone();
     shifted.blobs[1][0] += 5.0;
     for frame in [missing, shifted] {
-        let mut tracker = Tracker::new(rig.clone(), cfg.clone()).unwrap();
+        let mut tracker = merged_tracker(&rig, pen);
         assert!(tracker.push_frame(left.clone()).is_none());
         let s = tracker.push_frame(frame).unwrap();
         assert!(!matches!(s.quality, TrackQuality::Vision { .. }), "{s:?}");
@@ -682,12 +682,7 @@ fn an_unexplained_merge_is_not_completed() {
 fn the_search_window_covers_the_unlabelled_leds() {
     let t = 1_000_000;
     let (rig, pen, leds, left, right) = merged_spot_scene(t, 2);
-    let cfg = TrackerConfig {
-        pen,
-        time_align: false,
-        ..TrackerConfig::default()
-    };
-    let mut tracker = Tracker::new(rig.clone(), cfg).unwrap();
+    let mut tracker = merged_tracker(&rig, pen);
     assert!(tracker.push_frame(left).is_none());
     let s = tracker.push_frame(right).unwrap();
     assert_eq!(
