@@ -83,7 +83,7 @@ impl Candidate {
 
 /// Covariance of the triangulated point for isotropic image noise `sigma` (normalised units,
 /// left and right), by finite differences of the triangulation.
-fn covariance(
+pub(crate) fn covariance(
     tr: &Triangulator,
     ml: [f64; 2],
     mr: [f64; 2],

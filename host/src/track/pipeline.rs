@@ -32,6 +32,9 @@ mod clock_offset;
 mod config;
 mod line_order;
 mod merged;
+mod pen_line;
+#[cfg(test)]
+mod pen_line_tests;
 mod prior;
 mod refusal;
 mod safety;
@@ -129,7 +132,8 @@ pub struct TrackSample {
     pub direction: Option<[f64; 3]>,
     /// Identified LED positions (index 0 = LED 1).
     pub leds: [Option<[f64; 3]>; LED_COUNT],
-    /// `(left blob, right blob)` indices of each identified LED in the frames used.
+    /// `(left blob, right blob)` indices of each identified LED in the frames used: its own image
+    /// in each camera (None for an LED located inside a merged blob by pen-line stereo).
     pub labels: [Option<(usize, usize)>; LED_COUNT],
     /// How the tip was obtained.
     pub quality: TrackQuality,
@@ -345,7 +349,10 @@ impl Tracker {
                     IdentifyError::ContradictedByImage => RefusedBy::ImageEvidence,
                     IdentifyError::Ambiguous => RefusedBy::Rival,
                 });
-                match self.complete_merged_pair(t, by) {
+                let completed = self
+                    .complete_merged_pair(t, by)
+                    .or_else(|| self.complete_pen_line(t, by));
+                match completed {
                     Some(id) => id,
                     None => return self.refused(t, Refusal::Identify(by)),
                 }
@@ -367,7 +374,11 @@ impl Tracker {
         // An LED whose image touches another's was seen as a merged blob, half-way between the
         // two: a labelling of at least three LEDs keeps the others (at least two) and drops it.
         let mut id = id;
-        if let Some(merged) = self.labels.merged_leds(&pair, &vision, &id) {
+        let merges_checked = id.completed != 0 || id.from_pen_line;
+        if let Some(merged) = (!merges_checked)
+            .then(|| self.labels.merged_leds(&pair, &vision, &id))
+            .flatten()
+        {
             let kept = (0..LED_COUNT)
                 .filter(|&k| id.assignment[k].is_some() && !merged[k])
                 .count();
@@ -438,7 +449,9 @@ impl Tracker {
             return self.refused(t, Refusal::NoWorld);
         }
         let cands = &self.correspondences.candidates;
-        self.clock.observe(&self.rig, &self.points, cands, id);
+        if !id.from_pen_line {
+            self.clock.observe(&self.rig, &self.points, cands, id);
+        }
         let variance =
             prior::direction_variance(&self.config.pen.led_offsets, cands, id, &vision.direction);
         self.direction.correct(t, &vision.direction, variance);
@@ -469,9 +482,7 @@ impl Tracker {
             raw_tip: Some(estimate.tip.into()),
             direction: Some(estimate.direction.into()),
             leds: id.points.map(|p| p.map(Into::into)),
-            labels: id
-                .assignment
-                .map(|a| a.map(|k| (cands[k].left, cands[k].right))),
+            labels: pen_line::own_images(id, cands),
             quality: TrackQuality::Vision {
                 leds: id.count() as u8,
             },

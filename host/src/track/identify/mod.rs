@@ -62,6 +62,10 @@ pub struct Identification {
     /// a blob of their own in one camera, and in the other inside one blob with a neighbour's
     /// spot (bit i = LED i+1; see the tracker's merged-spot completion).
     pub completed: u8,
+    /// The LEDs were located along the pen's image line of a camera in which their spots merged
+    /// (the tracker's pen-line stereo): that camera's blob of an LED may be a merge covering it, so
+    /// the checks that read an LED's own image there (merges, clock offset) leave it out.
+    pub from_pen_line: bool,
 }
 
 impl Identification {
@@ -308,6 +312,7 @@ impl Identifier {
             resolution,
             interference,
             completed: 0,
+            from_pen_line: false,
         }
     }
 }

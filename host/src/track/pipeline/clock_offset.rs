@@ -205,6 +205,7 @@ mod tests {
             resolution: crate::track::identify::Resolution::Geometry,
             interference: 0,
             completed: 0,
+            from_pen_line: false,
         };
         c.observe(
             &rig,

@@ -138,6 +138,7 @@ pub(super) fn complete_merged(
         resolution: Resolution::Geometry,
         interference,
         completed,
+        from_pen_line: false,
     })
 }
 
@@ -253,7 +254,7 @@ fn nearest(blobs: &[[f64; 2]], p: [f64; 2]) -> Option<(usize, f64)> {
 }
 
 /// Distance from `p` to the segment `a`–`b`.
-fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+pub(super) fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let len2 = dx * dx + dy * dy;
     let s = if len2 > 0.0 {

@@ -390,6 +390,7 @@ mod tests {
             resolution: Resolution::Geometry,
             interference: 0,
             completed: 0,
+            from_pen_line: false,
         };
         let s = [l[0], l[2], l[3]];
         let mean = s.iter().sum::<f64>() / 3.0;

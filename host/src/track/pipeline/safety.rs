@@ -112,8 +112,9 @@ impl LabelGuard {
         {
             return Some(Unsafe::TwoLedsUnconfirmed);
         }
-        // A completed labelling checked its own LEDs' separation blob by blob (`merged.rs`).
-        if id.completed == 0 && !self.pen_images_separated(pair, vision, id) {
+        // A completed or pen-line labelling checked its own LEDs' separation blob by blob
+        // (`merged.rs`, `pen_line.rs`).
+        if id.completed == 0 && !id.from_pen_line && !self.pen_images_separated(pair, vision, id) {
             return Some(Unsafe::PenImagesOverlap);
         }
         (!self.labelled_blobs_isolated(pair, id)).then_some(Unsafe::BlobNotIsolated)
@@ -312,6 +313,7 @@ mod tests {
             resolution: Resolution::Geometry,
             interference: 0,
             completed: 0,
+            from_pen_line: false,
         }
     }
 

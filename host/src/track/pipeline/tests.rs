@@ -573,7 +573,7 @@ fn three_leds_give_tips_before_the_world_is_accepted() {
 /// LEDs `first + 1` and `first + 2` (12-17 px apart) are drawn there as one merged blob half-way
 /// between them, in the first one's place. Returns the rig, the pen, its four LED positions and
 /// the left and right frames at `t`.
-fn merged_spot_scene(
+pub(super) fn merged_spot_scene(
     t: u64,
     first: usize,
 ) -> (

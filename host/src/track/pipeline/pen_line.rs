@@ -1,0 +1,531 @@
+//! Pen-line stereo: a labelling for the pairs in which the pen points nearly at one camera, so
+//! that its LED spots crowd into fewer blobs there, while the other camera sees them apart.
+//!
+//! A merged blob lies on no LED's epipolar line, so point-to-point stereo finds one LED or none
+//! (webcam seed 3, the last stroke: the left camera sees LED 1, LEDs 2+3 as one blob and LED 4;
+//! the right camera LEDs 2, 3 and 4, LED 1 hidden by the hand; one stereo candidate for 0.7 s).
+//! Every blob of the crowded camera still lies on the pen's image line there: a single spot on
+//! its LED, a merged one at the centroid of collinear spots. That line and the crowded camera's
+//! centre span a plane that holds the pen, and each LED seen apart in the other camera lies where
+//! its viewing ray meets that plane. The pen is then the intersection of the two cameras' pen
+//! planes, and the LEDs are told apart by their distances along it (FIRES thesis, §4.1.2), as
+//! point stereo does. The labelling is accepted only when:
+//!
+//! * the two pen planes meet at a clear angle and every LED's ray meets the crowded camera's
+//!   plane at a clear angle (the point along the ray is well conditioned);
+//! * at least three LEDs have separate spots in the clear camera, at the pen's distances along
+//!   the line, and every blob on the pen's image there is one of them;
+//! * in the crowded camera every LED is imaged, by a spot of its own or inside a blob that covers
+//!   at least two neighbours and is centred on their segment (at least one such merge), and every
+//!   blob on the pen's image is one of these;
+//! * the pen points the way the fused direction does;
+//! * no other labelling (other camera crowded, other LEDs, the mirrored pen, other blobs) passes.
+//!
+//! The LEDs' points are the clear camera's rays met with the crowded camera's pen plane; the
+//! tracker adds them as stereo candidates (the crowded camera's blob being each LED's own or
+//! covering blob) and marks the labelling [`Identification::from_pen_line`], which its merge checks
+//! and the clock-offset estimate leave out (a covering blob is not its LEDs' image).
+
+use super::merged::segment_distance;
+use super::safety::{PairView, MERGE_MARGIN};
+use super::Tracker;
+use crate::stereo::correspond::covariance;
+use crate::stereo::{CameraId, Candidate, StereoRig};
+use crate::track::identify::{Identification, RefusedBy, Resolution};
+use crate::track::pen::LED_COUNT;
+use nalgebra::Vector3;
+
+/// What the pen-line labelling needs from the configuration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct LineOptions {
+    /// The pen's LED offsets along its axis, metres.
+    pub(super) led_offsets: [f64; LED_COUNT],
+    /// Largest mismatch of an LED's position along the pen from the pen's spacing, metres.
+    pub(super) tolerance: f64,
+    /// Largest distance of a blob from the pen's image line, or of an LED's image from its own
+    /// blob, pixels.
+    pub(super) gate_px: f64,
+    /// Smallest sine of the angle between the two pen planes, and between a clear-camera ray and
+    /// the crowded camera's pen plane.
+    pub(super) min_sine: f64,
+    /// The pen must point within this cosine of the fused direction.
+    pub(super) prior_min_cos: f64,
+}
+
+/// A labelling along the pen's line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct LineLabelling {
+    /// The camera whose LED spots merged.
+    pub(super) crowded: CameraId,
+    /// Per LED seen apart in the clear camera: its blob there, its (own or covering) blob in the
+    /// crowded camera, and its point.
+    pub(super) leds: [Option<LineLed>; LED_COUNT],
+    /// RMS mismatch of the LEDs' positions along the pen from its spacing, metres.
+    pub(super) mismatch: f64,
+}
+
+/// One LED of a [`LineLabelling`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct LineLed {
+    /// Its blob in the clear camera.
+    pub(super) clear_blob: usize,
+    /// Its own blob, or the blob covering it, in the crowded camera.
+    pub(super) crowded_blob: usize,
+    /// The clear camera's ray met with the crowded camera's pen plane, world frame, metres.
+    pub(super) point: Vector3<f64>,
+}
+
+impl Tracker {
+    /// The labelling of a pair refused for want of stereo candidates (not for a conflict: a
+    /// rival, a twin, an identity swap or the fused direction) when the pen's image lines in the
+    /// two cameras locate it uniquely (`pipeline/pen_line.rs`). Adds the labelled LEDs'
+    /// candidates to the pair's.
+    pub(super) fn complete_pen_line(
+        &mut self,
+        t: u64,
+        refused_by: RefusedBy,
+    ) -> Option<Identification> {
+        let conflict = matches!(
+            refused_by,
+            RefusedBy::Twin
+                | RefusedBy::Rival
+                | RefusedBy::TradingPlaces
+                | RefusedBy::DirectionPrior
+        );
+        // The fused direction, also while it is stale (the identifier's prior).
+        let (direction, _) = self.direction.prior(t)?;
+        if conflict || self.direction.world().is_none() {
+            return None;
+        }
+        let options = LineOptions {
+            led_offsets: self.config.pen.led_offsets,
+            tolerance: self.config.identify.tolerance,
+            gate_px: self.config.correspondence.max_epipolar_px,
+            min_sine: MIN_SINE,
+            prior_min_cos: self.config.identify.prior_min_cos,
+        };
+        let found = {
+            let pair = PairView {
+                rig: &self.rig,
+                align: &self.align,
+                points: &self.points,
+                candidates: &self.correspondences.candidates,
+                tip: &self.tip,
+                t,
+            };
+            label_pen_line(&pair, &options, &direction)?
+        };
+        let sigma = self.config.correspondence.pixel_sigma;
+        let pixel_sigma = [
+            sigma / self.rig.left.focal_px(),
+            sigma / self.rig.right.focal_px(),
+        ];
+        let mut assignment = [None; LED_COUNT];
+        let mut points = [None; LED_COUNT];
+        for (k, led) in found.leds.iter().enumerate() {
+            let Some(led) = led else { continue };
+            let (left, right) = match found.crowded {
+                CameraId::Left => (led.crowded_blob, led.clear_blob),
+                CameraId::Right => (led.clear_blob, led.crowded_blob),
+            };
+            // The crowded camera's image point is where the LED projects on its pen line.
+            let to_normal = |camera: CameraId| {
+                let q = match camera {
+                    CameraId::Left => led.point,
+                    CameraId::Right => self.rig.to_right(&led.point),
+                };
+                [q.x / q.z, q.y / q.z]
+            };
+            let ml = to_normal(CameraId::Left);
+            let mr = to_normal(CameraId::Right);
+            let mut cand = Candidate::at(left, right, led.point);
+            if sigma > 0.0 {
+                cand.covariance = covariance(&self.triangulator, ml, mr, &led.point, pixel_sigma);
+            }
+            assignment[k] = Some(self.correspondences.candidates.len());
+            points[k] = Some(led.point);
+            self.correspondences.candidates.push(cand);
+        }
+        let count = points.iter().flatten().count();
+        let fit = (-(found.mismatch / options.tolerance).powi(2)).exp();
+        Some(Identification {
+            assignment,
+            points,
+            distance_rms: found.mismatch,
+            confidence: fit * (count as f64 / LED_COUNT as f64).sqrt(),
+            resolution: Resolution::Geometry,
+            interference: 0,
+            completed: 0,
+            from_pen_line: true,
+        })
+    }
+}
+
+/// Smallest sine of the angles that condition the pen line (about 8.6 degrees).
+const MIN_SINE: f64 = 0.15;
+
+/// The unique labelling along the pen's line, with the pen pointing within
+/// `options.prior_min_cos` of `direction` (towards the tip), or None (none, or several).
+pub(super) fn label_pen_line(
+    pair: &PairView<'_>,
+    options: &LineOptions,
+    direction: &Vector3<f64>,
+) -> Option<LineLabelling> {
+    let mut found: Option<LineLabelling> = None;
+    for crowded in [CameraId::Left, CameraId::Right] {
+        let clear = other(crowded);
+        let (norm_c, norm_k) = (normals(pair, crowded), normals(pair, clear));
+        if norm_k.len() < 3 || norm_c.len() < 2 {
+            continue;
+        }
+        let gate_c = options.gate_px / pair.rig.camera(crowded).focal_px();
+        let gate_k = options.gate_px / pair.rig.camera(clear).focal_px();
+        let sets_c = collinear_sets(norm_c, gate_c, 2);
+        let sets_k = collinear_sets(norm_k, gate_k, 3);
+        for set_k in &sets_k {
+            for set_c in &sets_c {
+                for l in labellings(pair, options, crowded, set_c, set_k, direction) {
+                    match &found {
+                        None => found = Some(l),
+                        Some(f) if same_labels(f, &l) => {}
+                        Some(_) => return None,
+                    }
+                }
+            }
+        }
+    }
+    found
+}
+
+fn other(camera: CameraId) -> CameraId {
+    match camera {
+        CameraId::Left => CameraId::Right,
+        CameraId::Right => CameraId::Left,
+    }
+}
+
+fn normals<'a>(pair: &PairView<'a>, camera: CameraId) -> &'a [[f64; 2]] {
+    match camera {
+        CameraId::Left => &pair.points.left_norm,
+        CameraId::Right => &pair.points.right_norm,
+    }
+}
+
+/// Same crowded camera and the same clear-camera blob for every LED.
+fn same_labels(a: &LineLabelling, b: &LineLabelling) -> bool {
+    a.crowded == b.crowded
+        && a.leds
+            .iter()
+            .zip(&b.leds)
+            .all(|(x, y)| x.map(|x| x.clear_blob) == y.map(|y| y.clear_blob))
+}
+
+/// The sets of at least `min` points (bit masks) that lie within `gate` of a line through two of
+/// them, each set once.
+fn collinear_sets(points: &[[f64; 2]], gate: f64, min: usize) -> Vec<u32> {
+    let n = points.len().min(16);
+    let mut sets = Vec::new();
+    for i in 0..n {
+        for j in (i + 1)..n {
+            let (a, b) = (points[i], points[j]);
+            let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+            if len.is_nan() || len <= 0.0 {
+                continue;
+            }
+            let set = (0..n)
+                .filter(|&m| {
+                    let p = points[m];
+                    ((b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])).abs() / len
+                        <= gate
+                })
+                .fold(0u32, |s, m| s | (1 << m));
+            if set.count_ones() as usize >= min && !sets.contains(&set) {
+                sets.push(set);
+            }
+        }
+    }
+    sets
+}
+
+/// The plane through `camera`'s centre and the total-least-squares line of the normalised
+/// points in `set`: (unit normal, a point on it), world frame.
+fn pen_plane(
+    rig: &StereoRig,
+    camera: CameraId,
+    points: &[[f64; 2]],
+    set: u32,
+) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    let members: Vec<[f64; 2]> = (0..points.len())
+        .filter(|&m| set & (1 << m) != 0)
+        .map(|m| points[m])
+        .collect();
+    let n = members.len() as f64;
+    let mean = members
+        .iter()
+        .fold([0.0, 0.0], |s, p| [s[0] + p[0] / n, s[1] + p[1] / n]);
+    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+    for p in &members {
+        let (dx, dy) = (p[0] - mean[0], p[1] - mean[1]);
+        sxx += dx * dx;
+        sxy += dx * dy;
+        syy += dy * dy;
+    }
+    // The line's direction is the principal axis of the scatter.
+    let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    let dir = [angle.cos(), angle.sin()];
+    let a = Vector3::new(mean[0], mean[1], 1.0);
+    let b = Vector3::new(mean[0] + dir[0], mean[1] + dir[1], 1.0);
+    let normal_cam = a.cross(&b).try_normalize(1e-12)?;
+    Some(match camera {
+        CameraId::Left => (normal_cam, Vector3::zeros()),
+        CameraId::Right => (
+            rig.r_right_from_left.transpose() * normal_cam,
+            rig.right_center(),
+        ),
+    })
+}
+
+/// The world-frame ray (origin, unit direction) of normalised point `m` of `camera`.
+fn ray(rig: &StereoRig, camera: CameraId, m: [f64; 2]) -> (Vector3<f64>, Vector3<f64>) {
+    let d = Vector3::new(m[0], m[1], 1.0).normalize();
+    match camera {
+        CameraId::Left => (Vector3::zeros(), d),
+        CameraId::Right => (rig.right_center(), rig.r_right_from_left.transpose() * d),
+    }
+}
+
+/// Every labelling of the clear camera's blobs in `set_k` along the pen line that the crowded
+/// camera's blobs in `set_c` span with it, that passes the checks of the module doc.
+fn labellings(
+    pair: &PairView<'_>,
+    options: &LineOptions,
+    crowded: CameraId,
+    set_c: &u32,
+    set_k: &u32,
+    direction: &Vector3<f64>,
+) -> Vec<LineLabelling> {
+    let clear = other(crowded);
+    let (norm_c, norm_k) = (normals(pair, crowded), normals(pair, clear));
+    let (Some((n_c, o_c)), Some((n_k, _))) = (
+        pen_plane(pair.rig, crowded, norm_c, *set_c),
+        pen_plane(pair.rig, clear, norm_k, *set_k),
+    ) else {
+        return Vec::new();
+    };
+    let Some(u) = n_c.cross(&n_k).try_normalize(1e-12) else {
+        return Vec::new();
+    };
+    if n_c.cross(&n_k).norm() < options.min_sine {
+        return Vec::new();
+    }
+    // The clear camera's blobs on the crowded camera's pen plane, by position along the pen.
+    let mut along: Vec<(f64, usize, Vector3<f64>)> = Vec::new();
+    for m in (0..norm_k.len()).filter(|&m| set_k & (1 << m) != 0) {
+        let (origin, d) = ray(pair.rig, clear, norm_k[m]);
+        let sine = n_c.dot(&d);
+        if sine.abs() < options.min_sine {
+            return Vec::new();
+        }
+        let lambda = n_c.dot(&(o_c - origin)) / sine;
+        let p = origin + d * lambda;
+        if lambda <= 0.0 || p.z <= 0.0 || pair.rig.to_right(&p).z <= 0.0 {
+            return Vec::new();
+        }
+        along.push((u.dot(&p), m, p));
+    }
+    along.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let count = along.len();
+    if count > LED_COUNT {
+        return Vec::new();
+    }
+    let offsets = &options.led_offsets;
+    let mut out = Vec::new();
+    // The LEDs in order along +u (`sign` +1: increasing offsets), as increasing index subsets.
+    for sign in [1.0, -1.0] {
+        for subset in 0u32..(1 << LED_COUNT) {
+            if subset.count_ones() as usize != count {
+                continue;
+            }
+            let mut order: Vec<usize> =
+                (0..LED_COUNT).filter(|&k| subset & (1 << k) != 0).collect();
+            if sign < 0.0 {
+                order.reverse();
+            }
+            // Shift along the line that best puts each LED at its blob.
+            let shift = along
+                .iter()
+                .zip(&order)
+                .map(|(a, &k)| a.0 - sign * offsets[k])
+                .sum::<f64>()
+                / count as f64;
+            let residuals: Vec<f64> = along
+                .iter()
+                .zip(&order)
+                .map(|(a, &k)| a.0 - shift - sign * offsets[k])
+                .collect();
+            if residuals.iter().any(|r| r.abs() > options.tolerance) {
+                continue;
+            }
+            // The pen points from its LEDs towards the tip, against increasing offsets.
+            if direction.dot(&(-sign * u)) < options.prior_min_cos * direction.norm() {
+                continue;
+            }
+            let (s0, p0) = (along[0].0, along[0].2);
+            let model: [Vector3<f64>; LED_COUNT] =
+                std::array::from_fn(|k| p0 + u * (shift + sign * offsets[k] - s0));
+            let mut clear_blob = [None; LED_COUNT];
+            for (a, &k) in along.iter().zip(&order) {
+                clear_blob[k] = Some(a.1);
+            }
+            if !clear_image_explained(pair, options, clear, &model, &clear_blob) {
+                continue;
+            }
+            let Some(crowded_blob) = crowded_image_explained(pair, options, crowded, &model) else {
+                continue;
+            };
+            let mut leds = [None; LED_COUNT];
+            for (a, &k) in along.iter().zip(&order) {
+                leds[k] = Some(LineLed {
+                    clear_blob: a.1,
+                    crowded_blob: crowded_blob[k],
+                    point: a.2,
+                });
+            }
+            let mismatch = (residuals.iter().map(|r| r * r).sum::<f64>() / count as f64).sqrt();
+            out.push(LineLabelling {
+                crowded,
+                leds,
+                mismatch,
+            });
+        }
+    }
+    out
+}
+
+/// The pen's images (distorted pixels) of `camera` and the blobs' radii there.
+fn images<'a>(
+    pair: &PairView<'a>,
+    camera: CameraId,
+    model: &[Vector3<f64>; LED_COUNT],
+) -> Option<([[f64; 2]; LED_COUNT], &'a [f64])> {
+    let mut px = [[0.0; 2]; LED_COUNT];
+    for (k, p) in model.iter().enumerate() {
+        px[k] = pair.rig.project(camera, p).ok()?;
+    }
+    let cam = usize::from(camera == CameraId::Right);
+    let radii = pair.align.current(cam).map_or(&[][..], |f| &f.radii[..]);
+    Some((px, radii))
+}
+
+/// The clear camera: at least three LEDs with separate spots (`blob`), each apart from every
+/// other LED's image, and no other blob on the pen's image.
+fn clear_image_explained(
+    pair: &PairView<'_>,
+    options: &LineOptions,
+    camera: CameraId,
+    model: &[Vector3<f64>; LED_COUNT],
+    blob: &[Option<usize>; LED_COUNT],
+) -> bool {
+    let Some((px, radii)) = images(pair, camera, model) else {
+        return false;
+    };
+    let blobs = pair.points.pixels(camera);
+    let radius = |k: usize| blob[k].and_then(|n| radii.get(n).copied());
+    let largest = (0..LED_COUNT).filter_map(radius).fold(0.0, f64::max);
+    for k in (0..LED_COUNT).filter(|&k| blob[k].is_some()) {
+        let Some(&b) = blob[k].and_then(|n| blobs.get(n)) else {
+            return false;
+        };
+        if dist(b, px[k]) > options.gate_px {
+            return false;
+        }
+        let r_k = radius(k).unwrap_or(largest);
+        let apart = (0..LED_COUNT).filter(|&j| j != k).all(|j| {
+            let min = options
+                .gate_px
+                .max(MERGE_MARGIN * (r_k + radius(j).unwrap_or(largest)));
+            dist(px[j], px[k]) >= min
+        });
+        if !apart {
+            return false;
+        }
+    }
+    let used = |n: usize| blob.contains(&Some(n));
+    let on_pen = |q: [f64; 2]| segment_distance(q, px[0], px[LED_COUNT - 1]) <= options.gate_px;
+    blob.iter().flatten().count() >= 3 && (0..blobs.len()).all(|n| used(n) || !on_pen(blobs[n]))
+}
+
+/// The crowded camera: the blob that images each LED (its own spot, or a blob covering it and at
+/// least one neighbour, centred on their segment), with at least one such merge and no other
+/// blob on the pen's image; None when the image is not explained so.
+fn crowded_image_explained(
+    pair: &PairView<'_>,
+    options: &LineOptions,
+    camera: CameraId,
+    model: &[Vector3<f64>; LED_COUNT],
+) -> Option<[usize; LED_COUNT]> {
+    let (px, radii) = images(pair, camera, model)?;
+    let blobs = pair.points.pixels(camera);
+    let mut blob = [0usize; LED_COUNT];
+    for k in 0..LED_COUNT {
+        let (n, d) = blobs
+            .iter()
+            .map(|&q| dist(q, px[k]))
+            .enumerate()
+            .min_by(|x, y| x.1.total_cmp(&y.1))?;
+        let reach = options.gate_px.max(radii.get(n).copied().unwrap_or(0.0));
+        if d > reach {
+            return None;
+        }
+        blob[k] = n;
+    }
+    let mut merges = 0;
+    for k in 0..LED_COUNT {
+        let members: Vec<usize> = (0..LED_COUNT).filter(|&j| blob[j] == blob[k]).collect();
+        let (first, last) = (members[0], members[members.len() - 1]);
+        if first != k {
+            continue;
+        }
+        let centre = blobs[blob[k]];
+        if members.len() == 1 {
+            if dist(centre, px[k]) > options.gate_px {
+                return None;
+            }
+        } else {
+            // A merge covers neighbours only, and its centroid lies between them.
+            if last - first + 1 != members.len()
+                || segment_distance(centre, px[first], px[last]) > options.gate_px
+            {
+                return None;
+            }
+            merges += 1;
+        }
+    }
+    let on_pen = |q: [f64; 2]| segment_distance(q, px[0], px[LED_COUNT - 1]) <= options.gate_px;
+    let explained = (0..blobs.len()).all(|n| blob.contains(&n) || !on_pen(blobs[n]));
+    (merges > 0 && explained).then_some(blob)
+}
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// Each labelled LED's own blob in the left and right image: an LED that a pen-line labelling
+/// located inside a blob it shares with a neighbour (a merge) has no image of its own there.
+pub(super) fn own_images(
+    id: &Identification,
+    cands: &[Candidate],
+) -> [Option<(usize, usize)>; LED_COUNT] {
+    let pairs = id
+        .assignment
+        .map(|a| a.map(|k| (cands[k].left, cands[k].right)));
+    let shared = |k: usize, side: fn(&(usize, usize)) -> usize| {
+        pairs[k].is_some_and(|p| {
+            (0..LED_COUNT).any(|j| j != k && pairs[j].is_some_and(|q| side(&q) == side(&p)))
+        })
+    };
+    std::array::from_fn(|k| {
+        let merged = id.from_pen_line && (shared(k, |p| p.0) || shared(k, |p| p.1));
+        pairs[k].filter(|_| !merged)
+    })
+}

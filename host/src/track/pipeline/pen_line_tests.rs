@@ -1,0 +1,139 @@
+//! Pen-line stereo ([`super::pen_line`]): a pen whose back end points almost at the right
+//! camera, LEDs 2 and 3 merged into one blob there and LED 1 hidden from the left camera, so
+//! point stereo triangulates LED 4 alone.
+
+use super::align::{AlignOptions, PairPoints, TimeAlignment};
+use super::pen_line::{label_pen_line, LineOptions};
+use super::safety::PairView;
+use super::tests::merged_spot_scene;
+use super::{CameraFrame, TrackerConfig};
+use crate::stereo::{CameraId, Correspondences, StereoRig, Triangulator};
+use crate::track::pen::{PenGeometry, LED_COUNT};
+use crate::track::tip::TipEstimator;
+use nalgebra::Vector3;
+
+/// The scene's pair as the tracker prepares it, with its stereo candidates.
+struct Scene {
+    rig: StereoRig,
+    pen: PenGeometry,
+    leds: [Vector3<f64>; LED_COUNT],
+    align: TimeAlignment,
+    points: PairPoints,
+    candidates: Correspondences,
+    tip: TipEstimator,
+}
+
+const T: u64 = 1_000_000;
+
+/// The scene, with `edit` applied to its (left, right) frames first.
+fn scene(edit: impl FnOnce(&mut CameraFrame, &mut CameraFrame)) -> Scene {
+    let (rig, pen, leds, mut left, mut right) = merged_spot_scene(T, 1);
+    // The hand hides LED 1 from the left camera.
+    left.blobs.remove(0);
+    left.radii.remove(0);
+    edit(&mut left, &mut right);
+    let config = TrackerConfig {
+        pen,
+        time_align: false,
+        ..TrackerConfig::default()
+    };
+    let mut align = TimeAlignment::new(AlignOptions::from_config(&config));
+    align.push(0, T, left.blobs, left.radii);
+    align.push(1, T, right.blobs, right.radii);
+    let mut points = PairPoints::default();
+    align.prepare(&rig, 1, T, &mut points);
+    let mut candidates = Correspondences::default();
+    candidates.compute(
+        &rig,
+        &Triangulator::new(&rig, config.method),
+        &config.correspondence,
+        &points.left_norm,
+        &points.right_norm,
+    );
+    Scene {
+        rig,
+        pen,
+        leds,
+        align,
+        points,
+        candidates,
+        tip: TipEstimator::new(&pen),
+    }
+}
+
+fn options(pen: &PenGeometry) -> LineOptions {
+    let config = TrackerConfig::default();
+    LineOptions {
+        led_offsets: pen.led_offsets,
+        tolerance: config.identify.tolerance,
+        gate_px: config.correspondence.max_epipolar_px,
+        min_sine: 0.15,
+        prior_min_cos: config.identify.prior_min_cos,
+    }
+}
+
+fn label(s: &Scene, direction: &Vector3<f64>) -> Option<super::pen_line::LineLabelling> {
+    let pair = PairView {
+        rig: &s.rig,
+        align: &s.align,
+        points: &s.points,
+        candidates: &s.candidates.candidates,
+        tip: &s.tip,
+        t: T,
+    };
+    label_pen_line(&pair, &options(&s.pen), direction)
+}
+
+/// The pen's direction towards its tip.
+fn towards_tip(s: &Scene) -> Vector3<f64> {
+    (s.leds[0] - s.leds[3]).normalize()
+}
+
+/// Point stereo finds LED 4 alone; the pen line labels LEDs 2, 3 and 4 by the left camera's
+/// blobs, each covered by its own or the merged blob on the right, at the LEDs' exact positions
+/// (noise-free blobs).
+#[test]
+fn leds_merged_in_one_camera_are_located_along_the_pen_line() {
+    let s = scene(|_, _| {});
+    assert_eq!(s.candidates.candidates.len(), 1);
+    let l = label(&s, &towards_tip(&s)).expect("a pen-line labelling");
+    assert_eq!(l.crowded, CameraId::Right);
+    assert!(l.leds[0].is_none());
+    for (k, (clear, crowded)) in [(1, (0, 1)), (2, (1, 1)), (3, (2, 2))] {
+        let led = l.leds[k].unwrap();
+        assert_eq!(
+            (led.clear_blob, led.crowded_blob),
+            (clear, crowded),
+            "LED {}",
+            k + 1
+        );
+        let err = (led.point - s.leds[k]).norm();
+        assert!(err < 1e-9, "LED {} off by {err} m", k + 1);
+    }
+    assert!(l.mismatch < 1e-9);
+}
+
+/// The pen pointing the other way than the fused direction is refused (its mirror image does
+/// not fit the spacing either).
+#[test]
+fn a_pen_against_the_fused_direction_is_refused() {
+    let s = scene(|_, _| {});
+    assert!(label(&s, &-towards_tip(&s)).is_none());
+}
+
+/// Both images must be explained: a merged blob pushed 5 px off the pen's line, a blob between
+/// LEDs 2 and 3 too small to cover them, or a fourth blob on the pen's image in the clear camera
+/// leave no labelling.
+#[test]
+fn an_unexplained_image_is_refused() {
+    let off_line = scene(|_, right| right.blobs[1][0] += 5.0);
+    assert!(label(&off_line, &towards_tip(&off_line)).is_none());
+    let extra = scene(|left, _| {
+        let (a, b) = (left.blobs[1], left.blobs[2]);
+        left.blobs.push([0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]);
+        left.radii.push(3.0);
+    });
+    assert!(label(&extra, &towards_tip(&extra)).is_none());
+    let small = scene(|_, right| right.radii[1] = 3.0);
+    assert!(label(&small, &towards_tip(&small)).is_none());
+}
