@@ -456,6 +456,7 @@ fn camera_frame(
             t_ns: f.exposure_time_ns,
             blobs: blobs.iter().map(|b| [b.x, b.y]).collect(),
             radii: blobs.iter().map(|b| area_radius(b.area)).collect(),
+            shapes: Vec::new(),
         }));
     }
     let img = match reader.frame_image(f)? {

@@ -30,6 +30,7 @@
 mod align;
 mod clock_offset;
 mod config;
+mod labelling;
 mod line_order;
 mod merged;
 mod pen_line;
@@ -57,7 +58,7 @@ use align::{AlignOptions, PairPoints, TimeAlignment};
 use clock_offset::{ClockOffsetEstimator, ClockOptions};
 use nalgebra::Vector3;
 use prior::DirectionPrior;
-use safety::{LabelGuard, PairView};
+use safety::LabelGuard;
 
 /// The blobs of one camera image, in distorted pixel coordinates.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -73,6 +74,11 @@ pub struct CameraFrame {
     /// the pen's LED images must be for a labelling to be trusted.
     #[serde(default)]
     pub radii: Vec<f64>,
+    /// Central second moments `[cxx, cxy, cyy]` of each blob's thresholded area, pixels²
+    /// ([`crate::vision::Blob::shape`]); empty when unknown. A streak of merged LED spots gives
+    /// the pen's image line by its axis.
+    #[serde(default)]
+    pub shapes: Vec<[f64; 3]>,
 }
 
 impl CameraFrame {
@@ -83,6 +89,7 @@ impl CameraFrame {
             t_ns,
             blobs,
             radii: Vec::new(),
+            shapes: Vec::new(),
         }
     }
 
@@ -96,6 +103,7 @@ impl CameraFrame {
                 .iter()
                 .map(|b| area_radius(f64::from(b.area)))
                 .collect(),
+            shapes: blobs.iter().map(|b| b.shape).collect(),
         }
     }
 }
@@ -293,6 +301,7 @@ impl Tracker {
         };
         // With a rolling shutter the frame's time becomes that of the rows its blobs lie on.
         let t = self.align.push(this, t, frame.blobs, frame.radii);
+        self.align.set_shapes(this, frame.shapes);
         let t_other = self.align.current(other)?.t_ns;
         if t.abs_diff(t_other) > self.config.max_pair_dt_ns {
             return None;
@@ -349,53 +358,21 @@ impl Tracker {
                     IdentifyError::ContradictedByImage => RefusedBy::ImageEvidence,
                     IdentifyError::Ambiguous => RefusedBy::Rival,
                 });
-                let completed = self
-                    .complete_merged_pair(t, by)
-                    .or_else(|| self.complete_pen_line(t, by));
+                let completed = self.complete_merged_pair(t, by).or_else(|| {
+                    (!merged::is_conflict(by))
+                        .then(|| self.complete_pen_line(t))
+                        .flatten()
+                });
                 match completed {
                     Some(id) => id,
                     None => return self.refused(t, Refusal::Identify(by)),
                 }
             }
         };
-        // The vision tip (its axis also feeds the safety checks and the fusion).
-        let Ok(mut vision) = self.tip.estimate(&id.points) else {
-            return self.refused(t, Refusal::Tip);
+        let (id, vision) = match self.checked_or_pen_line(t, id, stale) {
+            Ok(checked) => checked,
+            Err(r) => return self.refused(t, r),
         };
-        // Safety.
-        let pair = PairView {
-            rig: &self.rig,
-            align: &self.align,
-            points: &self.points,
-            candidates: &self.correspondences.candidates,
-            tip: &self.tip,
-            t,
-        };
-        // An LED whose image touches another's was seen as a merged blob, half-way between the
-        // two: a labelling of at least three LEDs keeps the others (at least two) and drops it.
-        let mut id = id;
-        let merges_checked = id.completed != 0 || id.from_pen_line;
-        if let Some(merged) = (!merges_checked)
-            .then(|| self.labels.merged_leds(&pair, &vision, &id))
-            .flatten()
-        {
-            let kept = (0..LED_COUNT)
-                .filter(|&k| id.assignment[k].is_some() && !merged[k])
-                .count();
-            if merged.iter().any(|&m| m) && id.count() >= 3 && kept >= 2 {
-                for k in (0..LED_COUNT).filter(|&k| merged[k]) {
-                    id.assignment[k] = None;
-                    id.points[k] = None;
-                }
-                match self.tip.estimate(&id.points) {
-                    Ok(v) => vision = v,
-                    Err(_) => return self.refused(t, Refusal::Tip),
-                }
-            }
-        }
-        if let Some(why) = self.labels.check(&pair, &id, &vision, stale) {
-            return self.refused(t, Refusal::Safety(why));
-        }
         // The first pair after a loss has no image velocities: if its frames are far apart in
         // time, the labels are kept (the next pair moves the blobs with them) but not the tip.
         if !self.other_blobs_aligned(this, t, &id) {

@@ -5,7 +5,9 @@
 //! that contain no bright pixel are skipped with a vectorisable max), runs touching runs of the
 //! previous row (8-connectivity) are merged with union-find, and per-component moments are
 //! accumulated in closed form per run. Components are gated by area and elongation (ratio of the
-//! principal standard deviations). The sub-pixel centre is the intensity-weighted centroid over
+//! principal standard deviations): the limit admits the streak of merged spots that a pen
+//! pointing nearly at the camera images (four LEDs in a row reach an elongation of about 6), whose
+//! second moments ([`Blob::shape`]) give the pen's image line. The sub-pixel centre is the intensity-weighted centroid over
 //! the component's bounding box grown by `centroid_margin` pixels, with weights `max(I - b, 0)`
 //! where `b` is the background (fixed, or the mean of the grown box's border ring). Including the
 //! faint tails makes the centroid nearly unbiased for Gaussian spots (opentrack's point extractor
@@ -210,7 +212,7 @@ impl Default for BlobConfig {
             threshold: 60,
             min_area: 2,
             max_area: 2_000,
-            max_elongation: 3.0,
+            max_elongation: 8.0,
             background: BackgroundModel::LocalRing,
             centroid_margin: 2,
             max_blobs: 16,
@@ -232,6 +234,10 @@ pub struct Blob {
     pub intensity: f64,
     /// Bounding box of the thresholded pixels.
     pub bbox: Rect,
+    /// Central second moments `[cxx, cxy, cyy]` of the thresholded pixels, pixels²: the blob's
+    /// extent and axis (a streak of merged LED spots lies along the pen's image).
+    #[serde(default)]
+    pub shape: [f64; 3],
 }
 
 /// Where the last detection searched.
@@ -287,12 +293,19 @@ impl Moments {
         self.sxy += sx * y;
     }
 
-    /// Ratio of principal standard deviations (pixel quantisation variance 1/12 added).
-    fn elongation(&self) -> f64 {
+    /// Central second moments `[cxx, cxy, cyy]` of the component's pixels, pixels² (pixel
+    /// quantisation variance 1/12 added).
+    fn shape(&self) -> [f64; 3] {
         let (mx, my) = (self.sx / self.n, self.sy / self.n);
         let cxx = self.sxx / self.n - mx * mx + 1.0 / 12.0;
         let cyy = self.syy / self.n - my * my + 1.0 / 12.0;
         let cxy = self.sxy / self.n - mx * my;
+        [cxx, cxy, cyy]
+    }
+
+    /// Ratio of principal standard deviations (pixel quantisation variance 1/12 added).
+    fn elongation(&self) -> f64 {
+        let [cxx, cxy, cyy] = self.shape();
         let tr = 0.5 * (cxx + cyy);
         let disc = (0.25 * (cxx - cyy).powi(2) + cxy * cxy).sqrt();
         ((tr + disc) / (tr - disc).max(1e-12)).sqrt()
@@ -373,7 +386,10 @@ impl BlobDetector {
                 continue;
             }
             if let Some(b) = weighted_centroid(image, &m.bbox(), area, &self.config) {
-                out.push(b);
+                out.push(Blob {
+                    shape: m.shape(),
+                    ..b
+                });
             }
         }
         out.sort_by(|a, b| b.intensity.total_cmp(&a.intensity));
@@ -517,6 +533,7 @@ fn weighted_centroid(
         area,
         intensity: sw,
         bbox: *bbox,
+        shape: [0.0; 3],
     })
 }
 
@@ -602,6 +619,42 @@ mod tests {
         assert!(worst < 0.05, "worst centroid error {worst} px");
     }
 
+    /// Four touching spots in a row at 30 degrees (a pen pointing nearly at the camera) are one
+    /// blob, kept, whose second moments lie along the row.
+    #[test]
+    fn a_streak_of_merged_spots_is_kept_with_its_axis() {
+        let (w, h) = (120, 100);
+        let mut img = vec![10u8; w * h];
+        let angle = 30f64.to_radians();
+        for k in 0..4 {
+            let (cx, cy) = (
+                40.0 + 7.0 * k as f64 * angle.cos(),
+                40.0 + 7.0 * k as f64 * angle.sin(),
+            );
+            for y in 0..h {
+                for x in 0..w {
+                    if (x as f64 - cx).hypot(y as f64 - cy) <= 3.5 {
+                        img[y * w + x] = 220;
+                    }
+                }
+            }
+        }
+        let mut det = BlobDetector::new(BlobConfig::default());
+        let blobs = det.detect(&GrayImage::new(w, h, &img).unwrap(), None);
+        assert_eq!(blobs.len(), 1, "{blobs:?}");
+        let [cxx, cxy, cyy] = blobs[0].shape;
+        let axis = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
+        assert!(
+            (axis - angle).abs() < 1f64.to_radians(),
+            "axis {} deg",
+            axis.to_degrees()
+        );
+        let tr = 0.5 * (cxx + cyy);
+        let disc = (0.25 * (cxx - cyy).powi(2) + cxy * cxy).sqrt();
+        let elongation = ((tr + disc) / (tr - disc)).sqrt();
+        assert!(elongation > 3.0, "elongation {elongation}");
+    }
+
     #[test]
     fn gates_reject_big_and_elongated_components() {
         let (w, h) = (200, 100);
@@ -611,7 +664,7 @@ mod tests {
                 img[y * w + x0..y * w + x0 + ww].fill(220);
             }
         };
-        fill(10, 10, 20, 3); // elongated bar
+        fill(10, 10, 40, 2); // elongated bar (elongation 19)
         fill(60, 10, 50, 50); // too big (2500 px)
         fill(150, 50, 4, 4); // a good blob
         let mut det = BlobDetector::new(BlobConfig::default());

@@ -30,6 +30,9 @@ pub(super) struct KeptFrame {
     pub(super) labels: [Option<usize>; LED_COUNT],
     /// Per blob, the radius of its thresholded area, pixels (empty when unknown).
     pub(super) radii: Vec<f64>,
+    /// Per blob, the central second moments `[cxx, cxy, cyy]` of its thresholded area, pixels²
+    /// (empty when unknown).
+    pub(super) shapes: Vec<[f64; 3]>,
     /// Per blob, when it was exposed after `t_ns` (its row's rolling-shutter delay), nanoseconds;
     /// empty for a global shutter (every blob at `t_ns`).
     pub(super) blob_delay_ns: Vec<f64>,
@@ -71,6 +74,7 @@ impl CameraHistory {
             blobs,
             labels: [None; LED_COUNT],
             radii,
+            shapes: Vec::new(),
             blob_delay_ns,
         });
     }
@@ -185,6 +189,14 @@ impl TimeAlignment {
         let delays = blobs.iter().map(|b| row * (b[1] - median)).collect();
         self.cameras[cam].push(t, blobs, radii, delays);
         t
+    }
+
+    /// Keeps the blobs' second moments with the newest frame of camera `cam` (see
+    /// [`KeptFrame::shapes`]).
+    pub(super) fn set_shapes(&mut self, cam: usize, shapes: Vec<[f64; 3]>) {
+        if let Some(f) = self.cameras[cam].current.as_mut() {
+            f.shapes = shapes;
+        }
     }
 
     /// The newest frame of camera `cam`.
@@ -551,6 +563,7 @@ mod tests {
             blobs: blobs.clone(),
             labels: [None; LED_COUNT],
             radii: Vec::new(),
+            shapes: Vec::new(),
             blob_delay_ns: Vec::new(),
         };
         assert_eq!(

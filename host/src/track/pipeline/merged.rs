@@ -51,14 +51,7 @@ impl Tracker {
         t: u64,
         refused_by: RefusedBy,
     ) -> Option<Identification> {
-        let conflict = matches!(
-            refused_by,
-            RefusedBy::Twin
-                | RefusedBy::Rival
-                | RefusedBy::TradingPlaces
-                | RefusedBy::DirectionPrior
-        );
-        if conflict || self.correspondences.candidates.len() < 2 {
+        if is_conflict(refused_by) || self.correspondences.candidates.len() < 2 {
             return None;
         }
         let pair = PairView {
@@ -76,6 +69,15 @@ impl Tracker {
         };
         complete_merged(&pair, &options)
     }
+}
+
+/// True when identification refused for a conflict (a rival, a twin, an identity swap or the
+/// fused direction), which no completion may override.
+pub(super) fn is_conflict(refused_by: RefusedBy) -> bool {
+    matches!(
+        refused_by,
+        RefusedBy::Twin | RefusedBy::Rival | RefusedBy::TradingPlaces | RefusedBy::DirectionPrior
+    )
 }
 
 /// One pen pose that explains both images: per LED, the candidate (triangulated LEDs) and the

@@ -31,7 +31,7 @@ use super::safety::{PairView, MERGE_MARGIN};
 use super::Tracker;
 use crate::stereo::correspond::covariance;
 use crate::stereo::{CameraId, Candidate, StereoRig};
-use crate::track::identify::{Identification, RefusedBy, Resolution};
+use crate::track::identify::{Identification, Resolution};
 use crate::track::pen::LED_COUNT;
 use nalgebra::Vector3;
 
@@ -76,27 +76,14 @@ pub(super) struct LineLed {
 }
 
 impl Tracker {
-    /// The labelling of a pair refused for want of stereo candidates (not for a conflict: a
-    /// rival, a twin, an identity swap or the fused direction) when the pen's image lines in the
-    /// two cameras locate it uniquely (`pipeline/pen_line.rs`). Adds the labelled LEDs'
-    /// candidates to the pair's.
-    pub(super) fn complete_pen_line(
-        &mut self,
-        t: u64,
-        refused_by: RefusedBy,
-    ) -> Option<Identification> {
-        let conflict = matches!(
-            refused_by,
-            RefusedBy::Twin
-                | RefusedBy::Rival
-                | RefusedBy::TradingPlaces
-                | RefusedBy::DirectionPrior
-        );
+    /// The labelling of a pair whose LED spots crowd in one camera, when the pen's image lines
+    /// in the two cameras locate it uniquely (`pipeline/pen_line.rs`): tried where identification
+    /// refused for want of stereo candidates (not for a conflict) or the safety refused fewer than
+    /// three LEDs for crowded images. Adds the labelled LEDs' candidates to the pair's.
+    pub(super) fn complete_pen_line(&mut self, t: u64) -> Option<Identification> {
         // The fused direction, also while it is stale (the identifier's prior).
         let (direction, _) = self.direction.prior(t)?;
-        if conflict || self.direction.world().is_none() {
-            return None;
-        }
+        self.direction.world()?;
         let options = LineOptions {
             led_offsets: self.config.pen.led_offsets,
             tolerance: self.config.identify.tolerance,
@@ -175,16 +162,22 @@ pub(super) fn label_pen_line(
     for crowded in [CameraId::Left, CameraId::Right] {
         let clear = other(crowded);
         let (norm_c, norm_k) = (normals(pair, crowded), normals(pair, clear));
-        if norm_k.len() < 3 || norm_c.len() < 2 {
+        if norm_k.len() < 3 || norm_c.is_empty() {
             continue;
         }
         let gate_c = options.gate_px / pair.rig.camera(crowded).focal_px();
         let gate_k = options.gate_px / pair.rig.camera(clear).focal_px();
-        let sets_c = collinear_sets(norm_c, gate_c, 2);
+        // The crowded camera's candidate pen planes: through two or more collinear blobs, or
+        // along one streak's axis.
+        let planes_c: Vec<(Vector3<f64>, Vector3<f64>)> = collinear_sets(norm_c, gate_c, 2)
+            .into_iter()
+            .filter_map(|set| pen_plane(pair.rig, crowded, norm_c, set))
+            .chain((0..norm_c.len()).filter_map(|n| streak_plane(pair, crowded, n)))
+            .collect();
         let sets_k = collinear_sets(norm_k, gate_k, 3);
         for set_k in &sets_k {
-            for set_c in &sets_c {
-                for l in labellings(pair, options, crowded, set_c, set_k, direction) {
+            for plane_c in &planes_c {
+                for l in labellings(pair, options, crowded, plane_c, set_k, direction) {
                     match &found {
                         None => found = Some(l),
                         Some(f) if same_labels(f, &l) => {}
@@ -276,13 +269,65 @@ fn pen_plane(
     let a = Vector3::new(mean[0], mean[1], 1.0);
     let b = Vector3::new(mean[0] + dir[0], mean[1] + dir[1], 1.0);
     let normal_cam = a.cross(&b).try_normalize(1e-12)?;
-    Some(match camera {
+    Some(to_world(rig, camera, normal_cam))
+}
+
+/// Smallest elongation (ratio of principal standard deviations) of a blob whose axis is taken
+/// for the pen's image line: a streak of at least two merged spots.
+const STREAK_MIN_ELONGATION: f64 = 2.0;
+
+/// The principal axis of second moments `[cxx, cxy, cyy]` and the elongation.
+fn principal_axis(shape: &[f64; 3]) -> ([f64; 2], f64) {
+    let [cxx, cxy, cyy] = *shape;
+    let angle = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
+    let tr = 0.5 * (cxx + cyy);
+    let disc = (0.25 * (cxx - cyy).powi(2) + cxy * cxy).sqrt();
+    let elongation = ((tr + disc) / (tr - disc).max(1e-12)).sqrt();
+    ([angle.cos(), angle.sin()], elongation)
+}
+
+/// The plane through `camera`'s centre and the axis of blob `n` when it is a streak (see
+/// [`STREAK_MIN_ELONGATION`]): (unit normal, a point on it), world frame.
+fn streak_plane(
+    pair: &PairView<'_>,
+    camera: CameraId,
+    n: usize,
+) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    let cam = usize::from(camera == CameraId::Right);
+    let shape = pair.align.current(cam)?.shapes.get(n)?;
+    let (axis, elongation) = principal_axis(shape);
+    if elongation.is_nan() || elongation < STREAK_MIN_ELONGATION {
+        return None;
+    }
+    let c = pair.points.pixels(camera).get(n)?;
+    let model = pair.rig.camera(camera);
+    let reach = 2.0;
+    let a = model
+        .undistort([c[0] - reach * axis[0], c[1] - reach * axis[1]])
+        .ok()?;
+    let b = model
+        .undistort([c[0] + reach * axis[0], c[1] + reach * axis[1]])
+        .ok()?;
+    let normal_cam = Vector3::new(a[0], a[1], 1.0)
+        .cross(&Vector3::new(b[0], b[1], 1.0))
+        .try_normalize(1e-12)?;
+    Some(to_world(pair.rig, camera, normal_cam))
+}
+
+/// A plane through `camera`'s centre with normal `normal_cam` in that camera's frame: (unit
+/// normal, a point on it), world frame.
+fn to_world(
+    rig: &StereoRig,
+    camera: CameraId,
+    normal_cam: Vector3<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
+    match camera {
         CameraId::Left => (normal_cam, Vector3::zeros()),
         CameraId::Right => (
             rig.r_right_from_left.transpose() * normal_cam,
             rig.right_center(),
         ),
-    })
+    }
 }
 
 /// The world-frame ray (origin, unit direction) of normalised point `m` of `camera`.
@@ -295,21 +340,20 @@ fn ray(rig: &StereoRig, camera: CameraId, m: [f64; 2]) -> (Vector3<f64>, Vector3
 }
 
 /// Every labelling of the clear camera's blobs in `set_k` along the pen line that the crowded
-/// camera's blobs in `set_c` span with it, that passes the checks of the module doc.
+/// camera's pen plane `plane_c` (unit normal, a point) spans with them, that passes the checks
+/// of the module doc.
 fn labellings(
     pair: &PairView<'_>,
     options: &LineOptions,
     crowded: CameraId,
-    set_c: &u32,
+    plane_c: &(Vector3<f64>, Vector3<f64>),
     set_k: &u32,
     direction: &Vector3<f64>,
 ) -> Vec<LineLabelling> {
     let clear = other(crowded);
-    let (norm_c, norm_k) = (normals(pair, crowded), normals(pair, clear));
-    let (Some((n_c, o_c)), Some((n_k, _))) = (
-        pen_plane(pair.rig, crowded, norm_c, *set_c),
-        pen_plane(pair.rig, clear, norm_k, *set_k),
-    ) else {
+    let norm_k = normals(pair, clear);
+    let &(n_c, o_c) = plane_c;
+    let Some((n_k, _)) = pen_plane(pair.rig, clear, norm_k, *set_k) else {
         return Vec::new();
     };
     let Some(u) = n_c.cross(&n_k).try_normalize(1e-12) else {
@@ -466,6 +510,8 @@ fn crowded_image_explained(
 ) -> Option<[usize; LED_COUNT]> {
     let (px, radii) = images(pair, camera, model)?;
     let blobs = pair.points.pixels(camera);
+    let cam = usize::from(camera == CameraId::Right);
+    let shapes = pair.align.current(cam).map_or(&[][..], |f| &f.shapes[..]);
     let mut blob = [0usize; LED_COUNT];
     for k in 0..LED_COUNT {
         let (n, d) = blobs
@@ -473,8 +519,11 @@ fn crowded_image_explained(
             .map(|&q| dist(q, px[k]))
             .enumerate()
             .min_by(|x, y| x.1.total_cmp(&y.1))?;
-        let reach = options.gate_px.max(radii.get(n).copied().unwrap_or(0.0));
-        if d > reach {
+        let covered = match shapes.get(n) {
+            Some(shape) => within_extent(shape, blobs[n], px[k], options.gate_px),
+            None => d <= options.gate_px.max(radii.get(n).copied().unwrap_or(0.0)),
+        };
+        if !covered {
             return None;
         }
         blob[k] = n;
@@ -504,6 +553,17 @@ fn crowded_image_explained(
     let on_pen = |q: [f64; 2]| segment_distance(q, px[0], px[LED_COUNT - 1]) <= options.gate_px;
     let explained = (0..blobs.len()).all(|n| blob.contains(&n) || !on_pen(blobs[n]));
     (merges > 0 && explained).then_some(blob)
+}
+
+/// True when `p` lies within the extent of a blob centred at `centre` with second moments
+/// `shape`, widened by `gate_px`: `d^T (4 C + g^2 I)^-1 d <= 1` (a uniform disc of radius r has
+/// `C = r^2 / 4`, so its extent is the disc grown by the gate).
+fn within_extent(shape: &[f64; 3], centre: [f64; 2], p: [f64; 2], gate_px: f64) -> bool {
+    let g2 = gate_px * gate_px;
+    let (a, b, c) = (4.0 * shape[0] + g2, 4.0 * shape[1], 4.0 * shape[2] + g2);
+    let det = a * c - b * b;
+    let (dx, dy) = (p[0] - centre[0], p[1] - centre[1]);
+    det > 0.0 && (c * dx * dx - 2.0 * b * dx * dy + a * dy * dy) / det <= 1.0
 }
 
 fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {

@@ -137,3 +137,64 @@ fn an_unexplained_image_is_refused() {
     let small = scene(|_, right| right.radii[1] = 3.0);
     assert!(label(&small, &towards_tip(&small)).is_none());
 }
+
+/// The scene with all four LED spots merged into one streak in the right camera (its centre half
+/// way along the pen's image, second moments of a uniform segment over the LED images widened by
+/// a 2 px spot) and all four LEDs apart in the left camera.
+fn streak_scene() -> Scene {
+    let (rig, pen, leds, left, _) = merged_spot_scene(T, 1);
+    let px: Vec<[f64; 2]> = leds
+        .iter()
+        .map(|p| rig.project(CameraId::Right, p).unwrap())
+        .collect();
+    let (a, b) = (px[0], px[LED_COUNT - 1]);
+    let centre = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let (along, across) = (len2 / 12.0, 4.0);
+    let (ux, uy) = (dx / len2.sqrt(), dy / len2.sqrt());
+    let shape = [
+        along * ux * ux + across * uy * uy,
+        (along - across) * ux * uy,
+        along * uy * uy + across * ux * ux,
+    ];
+    let config = TrackerConfig {
+        pen,
+        time_align: false,
+        ..TrackerConfig::default()
+    };
+    let mut align = TimeAlignment::new(AlignOptions::from_config(&config));
+    align.push(0, T, left.blobs, left.radii);
+    align.push(1, T, vec![centre], vec![(len2.sqrt() * 0.5).max(3.0)]);
+    align.set_shapes(1, vec![shape]);
+    let mut points = PairPoints::default();
+    align.prepare(&rig, 1, T, &mut points);
+    Scene {
+        rig,
+        pen,
+        leds,
+        align,
+        points,
+        candidates: Correspondences::default(),
+        tip: TipEstimator::new(&pen),
+    }
+}
+
+/// One streak in the crowded camera: its axis is the pen's image line, and the left camera's
+/// four LEDs, met with that plane, are labelled at their exact positions. Without the streak's
+/// second moments (a round blob of unknown axis) there is no line and no labelling.
+#[test]
+fn a_streak_of_merged_spots_gives_the_pen_line() {
+    let s = streak_scene();
+    let l = label(&s, &towards_tip(&s)).expect("a pen-line labelling");
+    assert_eq!(l.crowded, CameraId::Right);
+    for k in 0..LED_COUNT {
+        let led = l.leds[k].unwrap();
+        assert_eq!((led.clear_blob, led.crowded_blob), (k, 0), "LED {}", k + 1);
+        let err = (led.point - s.leds[k]).norm();
+        assert!(err < 1e-9, "LED {} off by {err} m", k + 1);
+    }
+    let mut round = streak_scene();
+    round.align.set_shapes(1, Vec::new());
+    assert!(label(&round, &towards_tip(&round)).is_none());
+}

@@ -163,8 +163,9 @@ impl LabelGuard {
     /// unlabelled LED's taken as the largest labelled one's, so a spot nearer the camera is not
     /// underestimated). Two bright spots whose thresholded discs touch are detected as one blob
     /// half-way between them, which would be labelled as one of the two LEDs; a labelled blob
-    /// that is such a merge is itself wide, so its own radius flags it. None when the pen model
-    /// is unknown.
+    /// that is such a merge is itself wide, so its own radius flags it. Two labelled LEDs with
+    /// blobs of their own in that camera were resolved there, not merged, and only the
+    /// `min_image_separation_px` floor applies between them. None when the pen model is unknown.
     pub(super) fn merged_leds(
         &self,
         pair: &PairView<'_>,
@@ -178,15 +179,15 @@ impl LabelGuard {
         let mut merged = [false; LED_COUNT];
         for camera in [CameraId::Left, CameraId::Right] {
             let cam = usize::from(camera == CameraId::Right);
-            // The radius of each labelled LED's blob in this camera.
-            let radius: [Option<f64>; LED_COUNT] = std::array::from_fn(|k| {
-                let frame = pair.align.current(cam)?;
+            // Each labelled LED's blob in this camera, and its radius.
+            let blob: [Option<usize>; LED_COUNT] = std::array::from_fn(|k| {
                 let c = pair.candidates.get(id.assignment[k]?)?;
-                frame
-                    .radii
-                    .get(if cam == 0 { c.left } else { c.right })
-                    .copied()
+                Some(if cam == 0 { c.left } else { c.right })
             });
+            let radius: [Option<f64>; LED_COUNT] =
+                std::array::from_fn(|k| pair.align.current(cam)?.radii.get(blob[k]?).copied());
+            let resolved =
+                |k: usize, j: usize| blob[k].is_some() && blob[j].is_some() && blob[k] != blob[j];
             let largest = radius.iter().flatten().copied().fold(0.0, f64::max);
             let px: Vec<Option<[f64; 2]>> = leds
                 .iter()
@@ -202,9 +203,12 @@ impl LabelGuard {
                 };
                 let r_k = radius[k].unwrap_or(largest);
                 let near = px.iter().enumerate().any(|(j, b)| {
-                    let min = self
-                        .min_image_separation_px
-                        .max(MERGE_MARGIN * (r_k + radius[j].unwrap_or(largest)));
+                    let merge = MERGE_MARGIN * (r_k + radius[j].unwrap_or(largest));
+                    let min = if resolved(k, j) {
+                        self.min_image_separation_px
+                    } else {
+                        self.min_image_separation_px.max(merge)
+                    };
                     j != k && b.is_some_and(|b| (a[0] - b[0]).hypot(a[1] - b[1]) < min)
                 });
                 *flag |= near;
@@ -305,8 +309,13 @@ mod tests {
     }
 
     fn labelled(n: usize) -> Identification {
+        labelled_leds(std::array::from_fn(|k| k < n))
+    }
+
+    /// LED k labelled with candidate k where `which[k]`.
+    fn labelled_leds(which: [bool; LED_COUNT]) -> Identification {
         Identification {
-            assignment: std::array::from_fn(|k| (k < n).then_some(k)),
+            assignment: std::array::from_fn(|k| which[k].then_some(k)),
             points: [None; LED_COUNT],
             distance_rms: 0.0,
             confidence: 1.0,
@@ -392,9 +401,9 @@ mod tests {
         ));
     }
 
-    /// LED images closer than their blobs' discs (plus the margin) could be one merged blob: with
-    /// blob radii just under half the closest LED images' distance over the margin the labelling
-    /// is safe, just over it is not.
+    /// An LED image closer to an unlabelled LED's than their blobs' discs (plus the margin) could
+    /// be one merged blob: with LED 3 unlabelled and blob radii just under half the closest LED
+    /// images' distance (LEDs 2 and 3) over the margin the labelling is safe, just over it is not.
     #[test]
     fn led_images_within_their_blobs_reach_are_unsafe() {
         let guard = LabelGuard::new(&TrackerConfig::default());
@@ -414,20 +423,21 @@ mod tests {
                 let radii = vec![reach * factor; blobs.len()];
                 s.align.push(cam, 1_000, blobs, radii);
             }
+            let leds_1_2_4 = labelled_leds([true, true, false, true]);
             assert_eq!(
-                guard.pen_images_separated(&s.view(), &s.estimate(), &labelled(4)),
+                guard.pen_images_separated(&s.view(), &s.estimate(), &leds_1_2_4),
                 safe,
                 "radius {factor} x reach"
             );
         }
     }
 
-    /// Each pair of LED images is compared with its own two blobs' radii: LED 1's spot five
-    /// times wider than the others (nearer the camera, brighter) does not make LEDs 2 and 3,
-    /// the closest pair, merge, while a largest-radius rule would; grown over their reach, LEDs
-    /// 2 and 3 do.
+    /// Two labelled LEDs with blobs of their own were resolved, not merged: LEDs 2 and 3, the
+    /// closest pair, with blobs grown just over their reach and LED 1's spot five times wider
+    /// (nearer the camera, brighter) are safe when all four are labelled; with LED 3 unlabelled
+    /// its image could hide in LED 2's blob (its radius taken as the widest), grown or not.
     #[test]
-    fn a_wide_spot_does_not_merge_its_neighbours() {
+    fn resolved_spots_are_not_merges() {
         let guard = LabelGuard::new(&TrackerConfig::default());
         let mut s = Scene::new(pen(Vector3::new(0.05, 0.0, 0.7), Vector3::x()));
         let gap = |b: &[[f64; 2]], i: usize, j: usize| (b[i][0] - b[j][0]).hypot(b[i][1] - b[j][1]);
@@ -438,18 +448,19 @@ mod tests {
             .fold(f64::INFINITY, f64::min);
         assert!(blobs.iter().all(|b| gap(b, 0, 1) > 1.6 * closest));
         let reach = closest / (2.0 * MERGE_MARGIN);
-        for (factor, safe) in [(0.95, true), (1.05, false)] {
+        for factor in [0.95, 1.05] {
             for (cam, b) in blobs.iter().enumerate() {
                 let mut radii = vec![reach * factor; LED_COUNT];
                 radii[0] = 0.8 * closest;
                 assert!(MERGE_MARGIN * 2.0 * radii[0] > closest);
                 s.align.push(cam, 1_000, b.clone(), radii);
             }
-            assert_eq!(
-                guard.pen_images_separated(&s.view(), &s.estimate(), &labelled(4)),
-                safe,
-                "radius {factor} x reach"
-            );
+            let view = s.view();
+            let all = guard.pen_images_separated(&view, &s.estimate(), &labelled(4));
+            assert!(all, "radius {factor} x reach");
+            let leds_1_2_4 = labelled_leds([true, true, false, true]);
+            let without_3 = guard.pen_images_separated(&view, &s.estimate(), &leds_1_2_4);
+            assert!(!without_3, "radius {factor} x reach");
         }
     }
 
