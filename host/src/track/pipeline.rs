@@ -36,6 +36,7 @@ mod merged;
 mod pen_line;
 #[cfg(test)]
 mod pen_line_tests;
+mod pixel_noise;
 mod prior;
 mod refusal;
 mod safety;
@@ -57,6 +58,7 @@ use crate::vision::Rect;
 use align::{AlignOptions, PairPoints, TimeAlignment};
 use clock_offset::{ClockOffsetEstimator, ClockOptions};
 use nalgebra::Vector3;
+use pixel_noise::PixelNoise;
 use prior::DirectionPrior;
 use safety::LabelGuard;
 
@@ -150,7 +152,8 @@ pub struct TrackSample {
     /// Number of interference points rejected.
     pub interference: usize,
     /// Expected per-axis noise (one sigma) of `raw_tip`, metres: the labelled LEDs' triangulation
-    /// covariances through eq. 4.13 (vision samples only; None when unknown).
+    /// covariances through eq. 4.13, scaled to the rig's measured centroid noise (vision samples
+    /// only; None when unknown).
     #[serde(default)]
     pub tip_sigma_m: Option<f64>,
 }
@@ -191,6 +194,8 @@ pub struct Tracker {
     labels: LabelGuard,
     reckoner: TipDeadReckoner,
     tip_filter: TipFilter,
+    /// The rig's measured blob-centroid noise, which scales the tip's expected noise.
+    pixel_noise: PixelNoise,
     last_gyro: Option<(u64, Vector3<f64>)>,
     occluded: bool,
     /// Why the last pair gave no vision tip (None when it gave one).
@@ -215,6 +220,7 @@ impl Tracker {
             // Until a reference is known the dead reckoner runs in the default frame.
             reckoner: TipDeadReckoner::new(config.dead_reckon, config.world.unwrap_or_default()),
             tip_filter: TipFilter::new(config.tip_filter),
+            pixel_noise: PixelNoise::new(config.correspondence.pixel_sigma),
             last_gyro: None,
             occluded: false,
             last_refusal: None,
@@ -428,6 +434,12 @@ impl Tracker {
         let cands = &self.correspondences.candidates;
         if !id.from_pen_line {
             self.clock.observe(&self.rig, &self.points, cands, id);
+            let residuals = id
+                .assignment
+                .iter()
+                .flatten()
+                .map(|&k| cands[k].epipolar_px);
+            self.pixel_noise.observe(residuals);
         }
         let variance =
             prior::direction_variance(&self.config.pen.led_offsets, cands, id, &vision.direction);
@@ -445,7 +457,9 @@ impl Tracker {
         self.occluded = false;
         let fused_axis = self.config.direction_source == DirectionSource::Fused
             && self.direction.fused(t).is_some();
-        let sigma = self.tip_sigma(id, &estimate, variance, fused_axis);
+        let sigma = self
+            .tip_sigma(id, &estimate, variance, fused_axis)
+            .map(|s| s * self.pixel_noise.scale());
         let filtered = self.tip_filter.update(t, &estimate.tip, sigma);
         let tip = if self.config.tip_filter.enabled {
             filtered
