@@ -424,16 +424,22 @@ fn labellings(
             if !clear_image_explained(pair, options, clear, &model, &clear_blob) {
                 continue;
             }
-            let Some(crowded_blob) = crowded_image_explained(pair, options, crowded, &model) else {
+            let Some(crowded_blob) =
+                crowded_image_explained(pair, options, crowded, &model, &clear_blob)
+            else {
                 continue;
             };
+            // An LED hidden in the crowded camera has no stereo pair: it is left out.
             let mut leds = [None; LED_COUNT];
             for (a, &k) in along.iter().zip(&order) {
-                leds[k] = Some(LineLed {
+                leds[k] = crowded_blob[k].map(|n| LineLed {
                     clear_blob: a.1,
-                    crowded_blob: crowded_blob[k],
+                    crowded_blob: n,
                     point: a.2,
                 });
+            }
+            if leds.iter().flatten().count() < 3 {
+                continue;
             }
             let mismatch = (residuals.iter().map(|r| r * r).sum::<f64>() / count as f64).sqrt();
             out.push(LineLabelling {
@@ -501,18 +507,20 @@ fn clear_image_explained(
 
 /// The crowded camera: the blob that images each LED (its own spot, or a blob covering it and at
 /// least one neighbour, centred on their segment), with at least one such merge and no other
-/// blob on the pen's image; None when the image is not explained so.
+/// blob on the pen's image; one end LED may be hidden (by the hand) if the clear camera sees it
+/// (`clear_blob`). None when the image is not explained so.
 fn crowded_image_explained(
     pair: &PairView<'_>,
     options: &LineOptions,
     camera: CameraId,
     model: &[Vector3<f64>; LED_COUNT],
-) -> Option<[usize; LED_COUNT]> {
+    clear_blob: &[Option<usize>; LED_COUNT],
+) -> Option<[Option<usize>; LED_COUNT]> {
     let (px, radii) = images(pair, camera, model)?;
     let blobs = pair.points.pixels(camera);
     let cam = usize::from(camera == CameraId::Right);
     let shapes = pair.align.current(cam).map_or(&[][..], |f| &f.shapes[..]);
-    let mut blob = [0usize; LED_COUNT];
+    let mut blob = [None; LED_COUNT];
     for k in 0..LED_COUNT {
         let (n, d) = blobs
             .iter()
@@ -523,19 +531,21 @@ fn crowded_image_explained(
             Some(shape) => within_extent(shape, blobs[n], px[k], options.gate_px),
             None => d <= options.gate_px.max(radii.get(n).copied().unwrap_or(0.0)),
         };
-        if !covered {
-            return None;
-        }
-        blob[k] = n;
+        blob[k] = covered.then_some(n);
+    }
+    let hidden: Vec<usize> = (0..LED_COUNT).filter(|&k| blob[k].is_none()).collect();
+    let end = |k: usize| k == 0 || k == LED_COUNT - 1;
+    if hidden.len() > 1 || hidden.iter().any(|&k| !end(k) || clear_blob[k].is_none()) {
+        return None;
     }
     let mut merges = 0;
-    for k in 0..LED_COUNT {
+    for k in (0..LED_COUNT).filter(|&k| blob[k].is_some()) {
         let members: Vec<usize> = (0..LED_COUNT).filter(|&j| blob[j] == blob[k]).collect();
         let (first, last) = (members[0], members[members.len() - 1]);
         if first != k {
             continue;
         }
-        let centre = blobs[blob[k]];
+        let centre = blobs[blob[k]?];
         if members.len() == 1 {
             if dist(centre, px[k]) > options.gate_px {
                 return None;
@@ -551,7 +561,7 @@ fn crowded_image_explained(
         }
     }
     let on_pen = |q: [f64; 2]| segment_distance(q, px[0], px[LED_COUNT - 1]) <= options.gate_px;
-    let explained = (0..blobs.len()).all(|n| blob.contains(&n) || !on_pen(blobs[n]));
+    let explained = (0..blobs.len()).all(|n| blob.contains(&Some(n)) || !on_pen(blobs[n]));
     (merges > 0 && explained).then_some(blob)
 }
 

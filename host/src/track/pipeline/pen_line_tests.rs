@@ -25,12 +25,19 @@ struct Scene {
 
 const T: u64 = 1_000_000;
 
-/// The scene, with `edit` applied to its (left, right) frames first.
+/// The scene (LED 1 hidden from the left camera), with `edit` applied to its (left, right)
+/// frames first.
 fn scene(edit: impl FnOnce(&mut CameraFrame, &mut CameraFrame)) -> Scene {
+    scene_showing(false, edit)
+}
+
+/// The scene with LED 1 shown to the left camera or hidden from it.
+fn scene_showing(led1_left: bool, edit: impl FnOnce(&mut CameraFrame, &mut CameraFrame)) -> Scene {
     let (rig, pen, leds, mut left, mut right) = merged_spot_scene(T, 1);
-    // The hand hides LED 1 from the left camera.
-    left.blobs.remove(0);
-    left.radii.remove(0);
+    if !led1_left {
+        left.blobs.remove(0);
+        left.radii.remove(0);
+    }
     edit(&mut left, &mut right);
     let config = TrackerConfig {
         pen,
@@ -197,4 +204,31 @@ fn a_streak_of_merged_spots_gives_the_pen_line() {
     let mut round = streak_scene();
     round.align.set_shapes(1, Vec::new());
     assert!(label(&round, &towards_tip(&round)).is_none());
+}
+
+/// The hand may hide an end LED from the crowded camera when the clear one sees it: LED 1
+/// hidden on the right, the left camera's four LEDs label the pen and LED 1, without a stereo
+/// pair, is left out. Hidden from both cameras, or an inner LED hidden, there is no labelling.
+#[test]
+fn an_end_led_hidden_in_the_crowded_camera_is_left_out() {
+    let hidden_right = scene_showing(true, |_, right| {
+        right.blobs.remove(0);
+        right.radii.remove(0);
+    });
+    let l = label(&hidden_right, &towards_tip(&hidden_right)).expect("a pen-line labelling");
+    assert!(l.leds[0].is_none());
+    for k in 1..LED_COUNT {
+        let err = (l.leds[k].unwrap().point - hidden_right.leds[k]).norm();
+        assert!(err < 1e-9, "LED {} off by {err} m", k + 1);
+    }
+    let hidden_both = scene(|_, right| {
+        right.blobs.remove(0);
+        right.radii.remove(0);
+    });
+    assert!(label(&hidden_both, &towards_tip(&hidden_both)).is_none());
+    let inner = scene_showing(true, |_, right| {
+        right.blobs.remove(1);
+        right.radii.remove(1);
+    });
+    assert!(label(&inner, &towards_tip(&inner)).is_none());
 }
