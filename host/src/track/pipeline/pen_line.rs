@@ -5,9 +5,10 @@
 //! (webcam seed 3, the last stroke: the left camera sees LED 1, LEDs 2+3 as one blob and LED 4;
 //! the right camera LEDs 2, 3 and 4, LED 1 hidden by the hand; one stereo candidate for 0.7 s).
 //! Every blob of the crowded camera still lies on the pen's image line there: a single spot on
-//! its LED, a merged one at the centroid of collinear spots. That line and the crowded camera's
-//! centre span a plane that holds the pen, and each LED seen apart in the other camera lies where
-//! its viewing ray meets that plane. The pen is then the intersection of the two cameras' pen
+//! its LED, a merged one at the centroid of collinear spots; a streak of merged spots lies along
+//! it (its second moments' principal axis, when the pen's image is one blob). That line and the
+//! crowded camera's centre span a plane that holds the pen, and each LED seen apart in the other
+//! camera lies where its viewing ray meets that plane. The pen is then the intersection of the two cameras' pen
 //! planes, and the LEDs are told apart by their distances along it (FIRES thesis, §4.1.2), as
 //! point stereo does. The labelling is accepted only when:
 //!
@@ -17,7 +18,8 @@
 //!   the line, and every blob on the pen's image there is one of them;
 //! * in the crowded camera every LED is imaged, by a spot of its own or inside a blob that covers
 //!   at least two neighbours and is centred on their segment (at least one such merge), and every
-//!   blob on the pen's image is one of these;
+//!   blob on the pen's image is one of these; only an end LED that the clear camera sees may be
+//!   hidden there (by the hand), and is left out (it has no stereo pair);
 //! * the pen points the way the fused direction does;
 //! * no other labelling (other camera crowded, other LEDs, the mirrored pen, other blobs) passes.
 //!
