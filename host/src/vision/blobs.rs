@@ -221,6 +221,17 @@ impl Default for BlobConfig {
     }
 }
 
+/// The principal axis (unit vector) of second moments `[cxx, cxy, cyy]` and the elongation,
+/// the ratio of the principal standard deviations.
+pub fn principal_axis(shape: &[f64; 3]) -> ([f64; 2], f64) {
+    let [cxx, cxy, cyy] = *shape;
+    let angle = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
+    let tr = 0.5 * (cxx + cyy);
+    let disc = (0.25 * (cxx - cyy).powi(2) + cxy * cxy).sqrt();
+    let elongation = ((tr + disc) / (tr - disc).max(1e-12)).sqrt();
+    ([angle.cos(), angle.sin()], elongation)
+}
+
 /// One detected blob.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Blob {
@@ -305,10 +316,7 @@ impl Moments {
 
     /// Ratio of principal standard deviations (pixel quantisation variance 1/12 added).
     fn elongation(&self) -> f64 {
-        let [cxx, cxy, cyy] = self.shape();
-        let tr = 0.5 * (cxx + cyy);
-        let disc = (0.25 * (cxx - cyy).powi(2) + cxy * cxy).sqrt();
-        ((tr + disc) / (tr - disc).max(1e-12)).sqrt()
+        principal_axis(&self.shape()).1
     }
 
     fn bbox(&self) -> Rect {

@@ -3,5 +3,6 @@
 pub mod blobs;
 
 pub use blobs::{
-    BackgroundModel, Blob, BlobConfig, BlobDetector, GrayImage, ImageError, Rect, SearchRegion,
+    principal_axis, BackgroundModel, Blob, BlobConfig, BlobDetector, GrayImage, ImageError, Rect,
+    SearchRegion,
 };

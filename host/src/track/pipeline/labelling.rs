@@ -1,4 +1,4 @@
-//! From a labelling to a checked vision tip: the tip of the labelled LEDs, merged LEDs dropped,
+//! The pair as the labelling checks read it, and from a labelling to a checked vision tip: the tip of the labelled LEDs, merged LEDs dropped,
 //! the labelling safety (`LabelGuard::check`), and the pen-line retry for crowded images.
 
 use super::refusal::Refusal;
@@ -9,6 +9,18 @@ use crate::track::pen::LED_COUNT;
 use crate::track::tip::TipEstimate;
 
 impl Tracker {
+    /// The current pair at time `t` as the labelling checks and completions read it.
+    pub(super) fn pair_view(&self, t: u64) -> PairView<'_> {
+        PairView {
+            rig: &self.rig,
+            align: &self.align,
+            points: &self.points,
+            candidates: &self.correspondences.candidates,
+            tip: &self.tip,
+            t,
+        }
+    }
+
     /// [`Self::checked`], and where it refuses fewer than three LEDs for crowded images (merge
     /// reach, or two LEDs the prediction does not confirm) the pen-line labelling, checked in
     /// turn: the pen's image lines may still locate three or more (`pipeline/pen_line.rs`).
@@ -47,14 +59,7 @@ impl Tracker {
             return Err(Refusal::Tip);
         };
         // Safety.
-        let pair = PairView {
-            rig: &self.rig,
-            align: &self.align,
-            points: &self.points,
-            candidates: &self.correspondences.candidates,
-            tip: &self.tip,
-            t,
-        };
+        let pair = self.pair_view(t);
         // An LED whose image touches another's was seen as a merged blob, half-way between the
         // two: a labelling of at least three LEDs keeps the others (at least two) and drops it.
         let merges_checked = id.completed != 0 || id.from_pen_line;

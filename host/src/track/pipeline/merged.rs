@@ -54,14 +54,7 @@ impl Tracker {
         if is_conflict(refused_by) || self.correspondences.candidates.len() < 2 {
             return None;
         }
-        let pair = PairView {
-            rig: &self.rig,
-            align: &self.align,
-            points: &self.points,
-            candidates: &self.correspondences.candidates,
-            tip: &self.tip,
-            t,
-        };
+        let pair = self.pair_view(t);
         let options = MergedOptions {
             led_offsets: self.config.pen.led_offsets,
             tolerance: self.config.identify.tolerance,

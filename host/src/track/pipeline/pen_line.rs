@@ -28,13 +28,15 @@
 //! covering blob) and marks the labelling [`Identification::from_pen_line`], which its merge checks
 //! and the clock-offset estimate leave out (a covering blob is not its LEDs' image).
 
+use super::align::KeptFrame;
 use super::merged::segment_distance;
 use super::safety::{PairView, MERGE_MARGIN};
-use super::Tracker;
+use super::{Tracker, TrackerConfig};
 use crate::stereo::correspond::covariance;
 use crate::stereo::{CameraId, Candidate, StereoRig};
 use crate::track::identify::{Identification, Resolution};
 use crate::track::pen::LED_COUNT;
+use crate::vision::principal_axis;
 use nalgebra::Vector3;
 
 /// What the pen-line labelling needs from the configuration.
@@ -52,6 +54,19 @@ pub(super) struct LineOptions {
     pub(super) min_sine: f64,
     /// The pen must point within this cosine of the fused direction.
     pub(super) prior_min_cos: f64,
+}
+
+impl LineOptions {
+    /// The tracker's pen, identification tolerance, epipolar gate and prior cone.
+    pub(super) fn from_config(config: &TrackerConfig) -> Self {
+        Self {
+            led_offsets: config.pen.led_offsets,
+            tolerance: config.identify.tolerance,
+            gate_px: config.correspondence.max_epipolar_px,
+            min_sine: MIN_SINE,
+            prior_min_cos: config.identify.prior_min_cos,
+        }
+    }
 }
 
 /// A labelling along the pen's line.
@@ -86,24 +101,8 @@ impl Tracker {
         // The fused direction, also while it is stale (the identifier's prior).
         let (direction, _) = self.direction.prior(t)?;
         self.direction.world()?;
-        let options = LineOptions {
-            led_offsets: self.config.pen.led_offsets,
-            tolerance: self.config.identify.tolerance,
-            gate_px: self.config.correspondence.max_epipolar_px,
-            min_sine: MIN_SINE,
-            prior_min_cos: self.config.identify.prior_min_cos,
-        };
-        let found = {
-            let pair = PairView {
-                rig: &self.rig,
-                align: &self.align,
-                points: &self.points,
-                candidates: &self.correspondences.candidates,
-                tip: &self.tip,
-                t,
-            };
-            label_pen_line(&pair, &options, &direction)?
-        };
+        let options = LineOptions::from_config(&self.config);
+        let found = label_pen_line(&self.pair_view(t), &options, &direction)?;
         let sigma = self.config.correspondence.pixel_sigma;
         let pixel_sigma = [
             sigma / self.rig.left.focal_px(),
@@ -278,16 +277,6 @@ fn pen_plane(
 /// for the pen's image line: a streak of at least two merged spots.
 const STREAK_MIN_ELONGATION: f64 = 2.0;
 
-/// The principal axis of second moments `[cxx, cxy, cyy]` and the elongation.
-fn principal_axis(shape: &[f64; 3]) -> ([f64; 2], f64) {
-    let [cxx, cxy, cyy] = *shape;
-    let angle = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
-    let tr = 0.5 * (cxx + cyy);
-    let disc = (0.25 * (cxx - cyy).powi(2) + cxy * cxy).sqrt();
-    let elongation = ((tr + disc) / (tr - disc).max(1e-12)).sqrt();
-    ([angle.cos(), angle.sin()], elongation)
-}
-
 /// The plane through `camera`'s centre and the axis of blob `n` when it is a streak (see
 /// [`STREAK_MIN_ELONGATION`]): (unit normal, a point on it), world frame.
 fn streak_plane(
@@ -295,8 +284,7 @@ fn streak_plane(
     camera: CameraId,
     n: usize,
 ) -> Option<(Vector3<f64>, Vector3<f64>)> {
-    let cam = usize::from(camera == CameraId::Right);
-    let shape = pair.align.current(cam)?.shapes.get(n)?;
+    let shape = frame(pair, camera)?.shapes.get(n)?;
     let (axis, elongation) = principal_axis(shape);
     if elongation.is_nan() || elongation < STREAK_MIN_ELONGATION {
         return None;
@@ -464,9 +452,13 @@ fn images<'a>(
     for (k, p) in model.iter().enumerate() {
         px[k] = pair.rig.project(camera, p).ok()?;
     }
-    let cam = usize::from(camera == CameraId::Right);
-    let radii = pair.align.current(cam).map_or(&[][..], |f| &f.radii[..]);
+    let radii = frame(pair, camera).map_or(&[][..], |f| &f.radii[..]);
     Some((px, radii))
+}
+
+/// The newest frame of `camera` (its blobs' radii and second moments).
+fn frame<'a>(pair: &PairView<'a>, camera: CameraId) -> Option<&'a KeptFrame> {
+    pair.align.current(usize::from(camera == CameraId::Right))
 }
 
 /// The clear camera: at least three LEDs with separate spots (`blob`), each apart from every
@@ -520,8 +512,7 @@ fn crowded_image_explained(
 ) -> Option<[Option<usize>; LED_COUNT]> {
     let (px, radii) = images(pair, camera, model)?;
     let blobs = pair.points.pixels(camera);
-    let cam = usize::from(camera == CameraId::Right);
-    let shapes = pair.align.current(cam).map_or(&[][..], |f| &f.shapes[..]);
+    let shapes = frame(pair, camera).map_or(&[][..], |f| &f.shapes[..]);
     let mut blob = [None; LED_COUNT];
     for k in 0..LED_COUNT {
         let (n, d) = blobs

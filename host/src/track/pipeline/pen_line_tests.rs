@@ -25,6 +25,29 @@ struct Scene {
 
 const T: u64 = 1_000_000;
 
+/// The tracker's configuration for `pen` (one pair, no time alignment) and the pair of `left`
+/// and `right` at `T` as the tracker prepares it (blobs, radii and second moments).
+fn prepared(
+    rig: &StereoRig,
+    pen: PenGeometry,
+    left: CameraFrame,
+    right: CameraFrame,
+) -> (TrackerConfig, TimeAlignment, PairPoints) {
+    let config = TrackerConfig {
+        pen,
+        time_align: false,
+        ..TrackerConfig::default()
+    };
+    let mut align = TimeAlignment::new(AlignOptions::from_config(&config));
+    for (cam, frame) in [left, right].into_iter().enumerate() {
+        align.push(cam, T, frame.blobs, frame.radii);
+        align.set_shapes(cam, frame.shapes);
+    }
+    let mut points = PairPoints::default();
+    align.prepare(rig, 1, T, &mut points);
+    (config, align, points)
+}
+
 /// The scene (LED 1 hidden from the left camera), with `edit` applied to its (left, right)
 /// frames first.
 fn scene(edit: impl FnOnce(&mut CameraFrame, &mut CameraFrame)) -> Scene {
@@ -39,16 +62,7 @@ fn scene_showing(led1_left: bool, edit: impl FnOnce(&mut CameraFrame, &mut Camer
         left.radii.remove(0);
     }
     edit(&mut left, &mut right);
-    let config = TrackerConfig {
-        pen,
-        time_align: false,
-        ..TrackerConfig::default()
-    };
-    let mut align = TimeAlignment::new(AlignOptions::from_config(&config));
-    align.push(0, T, left.blobs, left.radii);
-    align.push(1, T, right.blobs, right.radii);
-    let mut points = PairPoints::default();
-    align.prepare(&rig, 1, T, &mut points);
+    let (config, align, points) = prepared(&rig, pen, left, right);
     let mut candidates = Correspondences::default();
     candidates.compute(
         &rig,
@@ -69,14 +83,10 @@ fn scene_showing(led1_left: bool, edit: impl FnOnce(&mut CameraFrame, &mut Camer
 }
 
 fn options(pen: &PenGeometry) -> LineOptions {
-    let config = TrackerConfig::default();
-    LineOptions {
-        led_offsets: pen.led_offsets,
-        tolerance: config.identify.tolerance,
-        gate_px: config.correspondence.max_epipolar_px,
-        min_sine: 0.15,
-        prior_min_cos: config.identify.prior_min_cos,
-    }
+    LineOptions::from_config(&TrackerConfig {
+        pen: *pen,
+        ..TrackerConfig::default()
+    })
 }
 
 fn label(s: &Scene, direction: &Vector3<f64>) -> Option<super::pen_line::LineLabelling> {
@@ -165,17 +175,12 @@ fn streak_scene() -> Scene {
         (along - across) * ux * uy,
         along * uy * uy + across * ux * ux,
     ];
-    let config = TrackerConfig {
-        pen,
-        time_align: false,
-        ..TrackerConfig::default()
+    let right = CameraFrame {
+        radii: vec![(len2.sqrt() * 0.5).max(3.0)],
+        shapes: vec![shape],
+        ..CameraFrame::new(CameraId::Right, T, vec![centre])
     };
-    let mut align = TimeAlignment::new(AlignOptions::from_config(&config));
-    align.push(0, T, left.blobs, left.radii);
-    align.push(1, T, vec![centre], vec![(len2.sqrt() * 0.5).max(3.0)]);
-    align.set_shapes(1, vec![shape]);
-    let mut points = PairPoints::default();
-    align.prepare(&rig, 1, T, &mut points);
+    let (_, align, points) = prepared(&rig, pen, left, right);
     Scene {
         rig,
         pen,

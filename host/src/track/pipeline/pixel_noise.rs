@@ -30,7 +30,11 @@ pub(super) struct PixelNoise {
     configured_px: f64,
     residuals: VecDeque<f64>,
     since_refresh: usize,
+    /// The estimate at the last refresh.
+    sigma_px: Option<f64>,
     scale: f64,
+    /// Reused for the median.
+    scratch: Vec<f64>,
 }
 
 impl PixelNoise {
@@ -40,7 +44,9 @@ impl PixelNoise {
             configured_px,
             residuals: VecDeque::with_capacity(WINDOW),
             since_refresh: 0,
+            sigma_px: None,
             scale: 1.0,
+            scratch: Vec::with_capacity(WINDOW),
         }
     }
 
@@ -53,23 +59,24 @@ impl PixelNoise {
             self.residuals.push_back(e.abs());
             self.since_refresh += 1;
         }
-        if self.since_refresh >= REFRESH && self.residuals.len() >= MIN_RESIDUALS {
+        let due = self.since_refresh >= REFRESH || self.sigma_px.is_none();
+        if due && self.residuals.len() >= MIN_RESIDUALS && self.configured_px > 0.0 {
             self.since_refresh = 0;
-            if let Some(sigma) = self.sigma_px() {
-                self.scale = (sigma / self.configured_px).clamp(SCALE_RANGE.0, SCALE_RANGE.1);
-            }
+            self.scratch.clear();
+            self.scratch.extend(self.residuals.iter().copied());
+            let mid = self.scratch.len() / 2;
+            let (_, median, _) = self.scratch.select_nth_unstable_by(mid, f64::total_cmp);
+            let sigma = *median / (0.6745 * std::f64::consts::SQRT_2);
+            self.sigma_px = Some(sigma);
+            self.scale = (sigma / self.configured_px).clamp(SCALE_RANGE.0, SCALE_RANGE.1);
         }
     }
 
-    /// The estimated centroid noise, pixels; None before [`MIN_RESIDUALS`] residuals.
+    /// The estimated centroid noise at the last refresh, pixels; None before [`MIN_RESIDUALS`]
+    /// residuals.
+    #[cfg(test)]
     pub(super) fn sigma_px(&self) -> Option<f64> {
-        if self.residuals.len() < MIN_RESIDUALS || self.configured_px <= 0.0 {
-            return None;
-        }
-        let mut v: Vec<f64> = self.residuals.iter().copied().collect();
-        let mid = v.len() / 2;
-        let (_, median, _) = v.select_nth_unstable_by(mid, f64::total_cmp);
-        Some(*median / (0.6745 * std::f64::consts::SQRT_2))
+        self.sigma_px
     }
 
     /// The factor from the configured noise to the measured one (1 until it is measured),
