@@ -29,6 +29,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         no_images: false,
         no_truth: false,
         object: None,
+        modes: Vec::new(),
     })?;
     eprintln!(
         "simulated {} s of '{}': {} IMU samples, {} camera frames, {} strokes -> {}",

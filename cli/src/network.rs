@@ -93,6 +93,7 @@ pub fn tracked_inputs(file: &StrokesFile) -> Vec<StrokeInput> {
                 .filter_map(|p| p.sigma_mm)
                 .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v)))),
             mode: s.buttons >> 1,
+            untracked_mm: s.untracked_mm(),
         })
         .collect()
 }
@@ -107,7 +108,8 @@ pub fn truth_inputs(truth: &[StrokeTruth]) -> Vec<StrokeInput> {
             points: s.tip_polyline_m.clone(),
             closed: matches!(s.kind, fires_record::StrokeKind::Boundary),
             sigma_mm: None,
-            mode: 0,
+            mode: s.mode,
+            untracked_mm: [0.0; 2],
         })
         .collect()
 }

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
+use fires_sim::motion::MAX_PLANNED_STROKES;
 use fires_sim::objects::ObjectKind;
 use fires_sim::{run_scenario, SimOptions, SimSummary, SCENARIOS};
 
@@ -40,6 +41,40 @@ pub struct SimArgs {
     /// Object the pen draws on: sphere, cylinder, box or blob (drawing scenarios only).
     #[arg(long, value_parser = parse_object)]
     pub object: Option<ObjectKind>,
+    /// Hold a mode button while drawing planned stroke ID: `ID=MODE`, MODE one of insert, sharp,
+    /// mirror, hole, glue, skin or 0–7 (the curve network's pen modes, docs/network.md); repeatable.
+    #[arg(long = "mode", value_parser = parse_stroke_mode)]
+    pub modes: Vec<(u32, u8)>,
+}
+
+/// The pen modes by name, in mode order (docs/network.md).
+const MODE_NAMES: [&str; 6] = ["insert", "sharp", "mirror", "hole", "glue", "skin"];
+
+fn parse_stroke_mode(s: &str) -> Result<(u32, u8), String> {
+    let (id, mode) = s
+        .split_once('=')
+        .ok_or_else(|| format!("'{s}': expected ID=MODE, e.g. 3=sharp"))?;
+    let id: u32 = id
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}': the stroke id '{id}' is not a number"))?;
+    if id as usize >= MAX_PLANNED_STROKES {
+        return Err(format!(
+            "'{s}': the plan has strokes 0 to {}",
+            MAX_PLANNED_STROKES - 1
+        ));
+    }
+    let mode = mode.trim();
+    let m = match MODE_NAMES.iter().position(|&n| n == mode) {
+        Some(m) => m as u8,
+        None => mode.parse::<u8>().ok().filter(|&m| m < 8).ok_or_else(|| {
+            format!(
+                "'{s}': unknown mode '{mode}' ({} or 0-7)",
+                MODE_NAMES.join(", ")
+            )
+        })?,
+    };
+    Ok((id, m))
 }
 
 fn parse_object(s: &str) -> Result<ObjectKind, String> {
@@ -61,6 +96,13 @@ pub fn simulate(args: &SimArgs) -> anyhow::Result<SimSummary> {
         images: !args.no_images,
         object: args.object,
         truth: !args.no_truth,
+        stroke_modes: {
+            let mut m = [0; MAX_PLANNED_STROKES];
+            for &(id, mode) in &args.modes {
+                m[id as usize] = mode;
+            }
+            m
+        },
     };
     let session = &args.session;
     run_scenario(

@@ -74,6 +74,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             closed: k == 0,
             sigma_mm: None,
             mode: 0,
+            untracked_mm: [0.0; 2],
         })
         .collect();
     let (net, _) = build_network(&inputs, &BuildOptions::default());

@@ -197,6 +197,96 @@ fn overshoot_is_trimmed_and_short_stop_extended() {
     assert!((on_ellipse - 1.0).abs() < 1e-3, "{on_ellipse}");
 }
 
+/// A stroke whose first 26 mm the tracker lost (`untracked_mm`) starts 26 mm inside the disc and
+/// crosses a curve 19 mm later: taken as drawn, its start is an overshoot and is trimmed (one face
+/// short); told that up to 30 mm went untracked, the insertion continues the start along its tangent
+/// to the boundary and the network has the faces of the whole stroke. A shorter untracked length
+/// than the gap does not reach the boundary, and the start is trimmed as before.
+#[test]
+fn an_untracked_start_is_continued_to_the_curve_it_began_on() {
+    let whole = common::disc::line([-0.1, 0.0, Z], [0.1, 0.0, Z], 0.002);
+    let tracked: Vec<[f64; 3]> = whole.iter().copied().filter(|p| p[0] >= -0.075).collect();
+    let build = |untracked: f64| {
+        let mut net = disc();
+        insert(&mut net, &vertical(-0.055)).unwrap();
+        let curve = CurveInput {
+            untracked_mm: [untracked, 0.0],
+            ..CurveInput::new(&tracked)
+        };
+        let (r, _) = insert_curve(&mut net, curve, &InsertOptions::default()).unwrap();
+        net.validate().unwrap();
+        (net, r)
+    };
+    let exact = {
+        let mut n = disc();
+        insert(&mut n, &vertical(-0.055)).unwrap();
+        insert(&mut n, &whole).unwrap();
+        n
+    };
+    let (trimmed, r) = build(0.0);
+    assert_eq!(trimmed.n_faces() + 1, exact.n_faces());
+    assert!(
+        matches!(
+            r.adjustments[..],
+            [Adjustment::Trimmed {
+                end: End::Start,
+                ..
+            }]
+        ),
+        "{r:?}"
+    );
+    let (short, _) = build(20.0);
+    assert_eq!(short.topology(), trimmed.topology());
+    let (net, r) = build(30.0);
+    assert_eq!(net.topology(), exact.topology());
+    assert!(
+        matches!(r.adjustments[..], [Adjustment::Extended { end: End::Start, gap_mm }] if (gap_mm - (tracked[0][0] + 0.1) * 1e3).abs() < 1e-6),
+        "{r:?}"
+    );
+}
+
+/// A stroke that ends on a curve a few millimetres from where that curve meets the boundary ends on
+/// that curve. Its end (a hair past the curve, as drawn) is within the intersection threshold of the
+/// boundary, and nearest the boundary there, but nearer still to the curve: the boundary approach is
+/// no meeting of its own (before, the end went onto the boundary, 4.6 mm from the junction, and the
+/// curve counted as crossed: one face too many).
+#[test]
+fn an_end_on_a_curve_near_a_junction_stays_on_that_curve() {
+    let mut net = disc();
+    // A chord meeting the boundary at about 40 degrees (its arc spans 80 degrees).
+    let (a, b) = (
+        common::disc::at(40f64.to_radians()),
+        common::disc::at(-40f64.to_radians()),
+    );
+    insert(&mut net, &common::disc::line(a, b, 0.002)).unwrap();
+    let faces = net.n_faces();
+    // The end: 6 mm along the chord from its start (about 3.9 mm from the boundary), from the left,
+    // 0.3 mm past the chord.
+    let len = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+    let p = [
+        a[0] + (b[0] - a[0]) * 0.006 / len,
+        a[1] + (b[1] - a[1]) * 0.006 / len,
+        Z,
+    ];
+    let start = common::disc::at(190f64.to_radians());
+    let d = ((p[0] - start[0]).powi(2) + (p[1] - start[1]).powi(2)).sqrt();
+    let end = [
+        p[0] + (p[0] - start[0]) * 0.0003 / d,
+        p[1] + (p[1] - start[1]) * 0.0003 / d,
+        Z,
+    ];
+    let r = insert(&mut net, &common::disc::line(start, end, 0.002)).unwrap();
+    assert_eq!(net.n_faces(), faces + 1, "{r:?}");
+    let last = *net
+        .edge_polyline(*r.edges.last().unwrap())
+        .unwrap()
+        .points
+        .last()
+        .unwrap();
+    let off = ((last[0] - p[0]).powi(2) + (last[1] - p[1]).powi(2)).sqrt();
+    assert!(off < 1e-3, "ends {off} m from the chord point");
+}
+
 #[test]
 fn thresholds_widen_with_the_stroke_uncertainty() {
     let c = chord(70f64.to_radians(), -110f64.to_radians(), -0.012);
@@ -209,6 +299,7 @@ fn thresholds_widen_with_the_stroke_uncertainty() {
         points: &c,
         stroke: Some(7),
         sigma_mm: Some(5.0),
+        untracked_mm: [0.0; 2],
     };
     let (r, _) = insert_curve(&mut net, curve, &InsertOptions::default()).unwrap();
     net.validate().unwrap();

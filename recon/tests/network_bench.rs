@@ -21,6 +21,7 @@ fn strokes(drawing: Vec<common::disc::Drawn>) -> Vec<StrokeInput> {
             closed,
             sigma_mm: None,
             mode: 0,
+            untracked_mm: [0.0; 2],
         })
         .collect()
 }

@@ -16,6 +16,7 @@ fn stroke(id: u32, points: Vec<[f64; 3]>, closed: bool) -> StrokeInput {
         closed,
         sigma_mm: None,
         mode: 0,
+        untracked_mm: [0.0; 2],
     }
 }
 
@@ -234,4 +235,82 @@ fn pen_modes_choose_the_tool() {
         .all(|(_, p)| p.attrs.sharpness == 1.0));
     // The journal replays the mirror and the sharp tag bit for bit.
     assert_eq!(replay(&report.journal, &strokes).unwrap(), net);
+}
+
+/// The journal's `align` step (thesis §5.3) moves the whole network onto the reference stroke redrawn
+/// on the moved object: with the curve redrawn exactly after a 15° turn and a 22 mm shift, every
+/// vertex lands within 1 mm of where the motion takes it, and a reference with no curve in the
+/// network is refused.
+#[test]
+fn an_align_step_moves_the_network_onto_the_redrawn_curve() {
+    use fires_recon::network::tools::quaternion_matrix;
+    // An asymmetric bowed chord (its PCA frame is well defined) and a vertical across it.
+    let (a, b) = (
+        common::disc::at(200f64.to_radians()),
+        common::disc::at(-30f64.to_radians()),
+    );
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let len = d[0].hypot(d[1]);
+    let n = [-d[1] / len, d[0] / len];
+    let wiggle: Vec<[f64; 3]> = (0..=150)
+        .map(|i| {
+            let s = f64::from(i) / 150.0;
+            let w = 0.02 * (std::f64::consts::PI * s).sin() * (1.0 + s);
+            [
+                a[0] + d[0] * s + n[0] * w,
+                a[1] + d[1] * s + n[1] * w,
+                common::disc::Z,
+            ]
+        })
+        .collect();
+    let strokes = vec![
+        stroke(0, circle(600), true),
+        stroke(1, wiggle.clone(), false),
+        stroke(2, common::disc::vertical(0.01), false),
+    ];
+    let (net, report) = build_network(&strokes, &BuildOptions::default());
+    assert_eq!(report.used.len(), 3, "{report:?}");
+    // The motion: 15° about a tilted axis, then a shift.
+    let axis = [0.3f64, 0.2, 1.0];
+    let an = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
+    let h = 15f64.to_radians() / 2.0;
+    let r = quaternion_matrix([
+        h.cos(),
+        h.sin() * axis[0] / an,
+        h.sin() * axis[1] / an,
+        h.sin() * axis[2] / an,
+    ]);
+    let t = [0.02, -0.01, 0.005];
+    let moved =
+        |p: [f64; 3]| [0, 1, 2].map(|i| r[i][0] * p[0] + r[i][1] * p[1] + r[i][2] * p[2] + t[i]);
+    let mut with_object = strokes.clone();
+    with_object.push(stroke(9, wiggle.iter().map(|&p| moved(p)).collect(), false));
+    let mut journal = report.journal.clone();
+    journal.steps.push(Step::Align {
+        reference: 1,
+        object: 9,
+        icp_iterations: 30,
+    });
+    let aligned = replay(&journal, &with_object).unwrap();
+    aligned.validate().unwrap();
+    let mut worst: f64 = 0.0;
+    for ((_, v), (_, w)) in net.vertices().zip(aligned.vertices()) {
+        let m = moved(v.position);
+        let e = [0, 1, 2].map(|i| m[i] - w.position[i]);
+        worst = worst.max((e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt());
+    }
+    assert!(
+        worst < 1e-3,
+        "worst vertex {worst} m from the moved network"
+    );
+    journal.steps.pop();
+    journal.steps.push(Step::Align {
+        reference: 7,
+        object: 9,
+        icp_iterations: 30,
+    });
+    assert!(matches!(
+        replay(&journal, &with_object),
+        Err(JournalError::Refused { .. })
+    ));
 }

@@ -17,6 +17,7 @@ fn curve(pts: &[[f64; 3]], id: u32) -> CurveInput<'_> {
         points: pts,
         stroke: Some(id),
         sigma_mm: None,
+        untracked_mm: [0.0; 2],
     }
 }
 
@@ -265,6 +266,7 @@ fn a_journal_with_a_closure_replays_bit_for_bit() {
         closed: i == 0,
         sigma_mm: None,
         mode: 0,
+        untracked_mm: [0.0; 2],
     })
     .collect();
     let insert = |stroke| Step::Insert {

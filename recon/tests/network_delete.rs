@@ -15,6 +15,7 @@ fn add(net: &mut Network, pts: &[[f64; 3]], id: u32) -> bool {
         points: pts,
         stroke: Some(id),
         sigma_mm: None,
+        untracked_mm: [0.0; 2],
     };
     let ok = insert_curve(net, c, &InsertOptions::default()).is_ok();
     net.validate().unwrap();
@@ -28,6 +29,7 @@ fn disc() -> Network {
         points: &c,
         stroke: Some(0),
         sigma_mm: None,
+        untracked_mm: [0.0; 2],
     };
     insert_boundary(&mut net, curve, &BoundaryOptions::default()).unwrap();
     net

@@ -29,6 +29,7 @@ fn with(points: &[[f64; 3]], id: u32) -> CurveInput<'_> {
         points,
         stroke: Some(id),
         sigma_mm: None,
+        untracked_mm: [0.0; 2],
     }
 }
 

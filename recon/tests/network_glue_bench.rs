@@ -25,6 +25,7 @@ fn hundred_faces() -> Network {
             closed,
             sigma_mm: None,
             mode: 0,
+            untracked_mm: [0.0; 2],
         })
         .collect();
     let (net, report) = build_network(&s, &BuildOptions::default());

@@ -46,6 +46,7 @@ fn curve(pts: &[[f64; 3]], id: u32) -> CurveInput<'_> {
         points: pts,
         stroke: Some(id),
         sigma_mm: None,
+        untracked_mm: [0.0; 2],
     }
 }
 
@@ -257,6 +258,7 @@ fn undo_redo_and_journal_replay_of_gluings_are_exact() {
             closed: i == 0,
             sigma_mm: None,
             mode: 0,
+            untracked_mm: [0.0; 2],
         })
         .collect();
     let average = GlueOptions {
@@ -441,6 +443,7 @@ fn a_journal_tube_step_replays_bit_for_bit() {
             closed: i == 0,
             sigma_mm: None,
             mode: 0,
+            untracked_mm: [0.0; 2],
         })
         .collect();
     for (id, points) in [(20, c1.clone()), (21, c2.clone())] {
@@ -450,6 +453,7 @@ fn a_journal_tube_step_replays_bit_for_bit() {
             closed: false,
             sigma_mm: None,
             mode: 0,
+            untracked_mm: [0.0; 2],
         });
     }
     let insert = |stroke| Step::Insert {

@@ -50,6 +50,7 @@ fn hole(net: &mut Network, pts: &[[f64; 3]]) -> Result<HoleReport, ToolError> {
             points: pts,
             stroke: Some(7),
             sigma_mm: None,
+            untracked_mm: [0.0; 2],
         },
         &HoleOptions::default(),
     );
@@ -252,6 +253,7 @@ fn a_hole_with_crossings_cuts_the_faces_inside() {
             points: &ring(cx, cy, r, 120, true),
             stroke: Some(7),
             sigma_mm: None,
+            untracked_mm: [0.0; 2],
         },
         &HoleOptions::default(),
     )
@@ -362,6 +364,7 @@ fn strokes() -> Vec<StrokeInput> {
         closed,
         sigma_mm: None,
         mode,
+        untracked_mm: [0.0; 2],
     };
     vec![
         s(0, circle(400), true, 0),
@@ -376,6 +379,7 @@ fn with_id(s: &StrokeInput) -> CurveInput<'_> {
         points: &s.points,
         stroke: Some(s.id),
         sigma_mm: None,
+        untracked_mm: [0.0; 2],
     }
 }
 
@@ -391,6 +395,7 @@ fn holes_replay_from_the_journal_bit_for_bit() {
             points: &s.points,
             stroke: Some(s.id),
             sigma_mm: None,
+            untracked_mm: [0.0; 2],
         };
         create_hole(&mut net, c, &opts).unwrap();
         net.validate().unwrap();
@@ -471,6 +476,7 @@ fn hundred_faces() -> Network {
             closed,
             sigma_mm: None,
             mode: 0,
+            untracked_mm: [0.0; 2],
         })
         .collect();
     let (net, report) = build_network(&strokes, &BuildOptions::default());
@@ -678,6 +684,7 @@ fn pen_modes_make_a_handle_and_a_tube_that_replay() {
         closed,
         sigma_mm: None,
         mode,
+        untracked_mm: [0.0; 2],
     };
     let marker = line([-0.02, 0.0, Z], [0.021, 0.038, Z], 0.002);
     let strokes = vec![

@@ -188,12 +188,14 @@ fn skin(net: &mut Network, t: &Tube, options: &SkinOptions) -> Result<SkinReport
             points: p,
             stroke: Some(i as u32),
             sigma_mm: None,
+            untracked_mm: [0.0; 2],
         })
         .collect();
     let spine = |s: usize| CurveInput {
         points: &t.spines[s],
         stroke: Some(100 + s as u32),
         sigma_mm: None,
+        untracked_mm: [0.0; 2],
     };
     skin_profiles(net, &profiles, [spine(0), spine(1)], options).map(|r| r.0)
 }
@@ -303,6 +305,7 @@ fn capped_skins_are_closed_and_refusals_leave_the_network_unchanged() {
         points: &disc,
         stroke: Some(50),
         sigma_mm: None,
+        untracked_mm: [0.0; 2],
     };
     insert_boundary(&mut net, c, &BoundaryOptions::default()).unwrap();
     let before = net.clone();
@@ -367,6 +370,7 @@ fn a_journal_skin_step_replays_bit_for_bit() {
             closed: true,
             sigma_mm: None,
             mode: 5 << 1,
+            untracked_mm: [0.0; 2],
         })
         .collect();
     for s in 0..2 {
@@ -376,6 +380,7 @@ fn a_journal_skin_step_replays_bit_for_bit() {
             closed: false,
             sigma_mm: None,
             mode: 5 << 1,
+            untracked_mm: [0.0; 2],
         });
     }
     let journal = Journal {

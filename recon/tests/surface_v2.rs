@@ -262,6 +262,7 @@ fn disc_network(lift: impl Fn(f64, f64) -> f64) -> fires_recon::network::Network
             closed: k == 0,
             sigma_mm: None,
             mode: 0,
+            untracked_mm: [0.0; 2],
         })
         .collect();
     let (net, report) = build_network(&inputs, &BuildOptions::default());

@@ -210,4 +210,56 @@ impl Stroke {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+
+    /// How far the pen may have drawn, millimetres, before its first tracked point and after its
+    /// last (the button was down, the tracker had no tip): the untracked time at that end times the
+    /// speed of the [`SPEED_POINTS`] tracked points next to it (an upper bound while the pen speeds up
+    /// from rest, as a stroke does). 0 when the gap is under [`UNTRACKED_GAP_NS`] (ordinary latency).
+    /// The curve network widens its search for that end's curve by it (docs/network.md).
+    pub fn untracked_mm(&self) -> [f64; 2] {
+        let pts: Vec<&StrokePoint> = self.points().collect();
+        let (Some(first), Some(last)) = (pts.first(), pts.last()) else {
+            return [0.0; 2];
+        };
+        let speed = |ps: &[&StrokePoint]| {
+            let (Some(a), Some(b)) = (ps.first(), ps.last()) else {
+                return 0.0;
+            };
+            let len: f64 = ps
+                .windows(2)
+                .map(|w| {
+                    let d = [0, 1, 2].map(|k| w[1].p_m[k] - w[0].p_m[k]);
+                    (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+                })
+                .sum();
+            let dt = b.t_ns.saturating_sub(a.t_ns) as f64 * 1e-9;
+            if dt > 0.0 {
+                len / dt
+            } else {
+                0.0
+            }
+        };
+        let k = SPEED_POINTS.min(pts.len());
+        let gap = |dt_ns: u64, v: f64| {
+            if dt_ns < UNTRACKED_GAP_NS {
+                0.0
+            } else {
+                dt_ns as f64 * 1e-9 * v * 1e3
+            }
+        };
+        [
+            gap(first.t_ns.saturating_sub(self.t_start_ns), speed(&pts[..k])),
+            gap(
+                self.t_end_ns.saturating_sub(last.t_ns),
+                speed(&pts[pts.len() - k..]),
+            ),
+        ]
+    }
 }
+
+/// Tracked points next to an end whose mean speed [`Stroke::untracked_mm`] takes.
+pub const SPEED_POINTS: usize = 5;
+
+/// A gap between the button and the first (last) tracked point shorter than this is latency, not an
+/// untracked part of the stroke: three frames of a 60 Hz camera.
+pub const UNTRACKED_GAP_NS: u64 = 50_000_000;

@@ -146,6 +146,10 @@ pub struct StrokeTruth {
     pub crosses: Vec<u32>,
     /// True tip polyline, metres, sampled every 10 ms of drawing (first and last point exact).
     pub tip_polyline_m: Vec<[f64; 3]>,
+    /// Pen mode held while drawing (the mode buttons, `buttons >> 1`; 0: curve insertion). Absent in
+    /// files written before modes were simulated: 0.
+    #[serde(default)]
+    pub mode: u8,
 }
 
 /// A link disconnection interval.

@@ -124,3 +124,35 @@ fn the_link_summary_flattens_the_decoder_counters() {
     assert_eq!(v["lost"], 2);
     assert_eq!(serde_json::from_value::<LinkSummary>(v).unwrap(), s);
 }
+
+/// `Stroke::untracked_mm`: the button time against the first and last tracked points, times the speed
+/// of the tracked points next to that end; gaps under 50 ms (latency) count as none.
+#[test]
+fn the_untracked_ends_are_the_gap_times_the_speed_next_to_them() {
+    // Ten points 10 ms apart moving 1 mm each (0.1 m/s), tracked from 200 ms after the press to
+    // 30 ms before the release.
+    let points = (0..10u64)
+        .map(|i| StrokePoint {
+            t_ns: 200_000_000 + i * 10_000_000,
+            p_m: [0.001 * i as f64, 0.0, 0.6],
+            sigma_mm: None,
+        })
+        .collect();
+    let mut s = Stroke {
+        id: 0,
+        t_start_ns: 0,
+        t_end_ns: 320_000_000,
+        buttons: 1,
+        closed: false,
+        raw_points: 10,
+        pieces: vec![StrokePiece { points }],
+    };
+    let [a, b] = s.untracked_mm();
+    assert!((a - 20.0).abs() < 1e-9, "{a}");
+    assert_eq!(b, 0.0);
+    s.t_end_ns = 400_000_000;
+    let [_, b] = s.untracked_mm();
+    assert!((b - 11.0).abs() < 1e-9, "{b}");
+    s.pieces.clear();
+    assert_eq!(s.untracked_mm(), [0.0; 2]);
+}

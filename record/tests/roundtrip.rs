@@ -115,6 +115,7 @@ fn write_sample(dir: &Path) -> (Vec<LinkChunk>, Vec<CameraFrame>, GrayImage) {
         ends_on: None,
         crosses: vec![],
         tip_polyline_m: vec![[0.0; 3], [1.0, 0.0, 0.0]],
+        mode: 1,
     }])
     .unwrap();
     w.finish().unwrap();

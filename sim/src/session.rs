@@ -9,7 +9,7 @@ use crate::camera::{CameraOutput, NoiseTable};
 use crate::imu::{kinematics, Imu};
 use crate::link::{host_ns, transmit, PenFirmware, Produced};
 use crate::motion::trajectory::{orientation_from_axis, random_direction_near};
-use crate::motion::{Pose, Scene, Trajectory};
+use crate::motion::{Pose, Scene, Trajectory, MAX_PLANNED_STROKES};
 use crate::objects::{ObjectKind, V3};
 use crate::rng::SimRng;
 use crate::scenario::{scenario, world_up, MotionSpec, Scenario};
@@ -34,6 +34,9 @@ pub struct SimOptions {
     pub object: Option<ObjectKind>,
     /// Write ground truth (`truth/`).
     pub truth: bool,
+    /// Pen mode held while drawing each planned stroke, by stroke id (0: curve insertion; the curve
+    /// network maps modes to tools, docs/network.md). All 0 by default: only the draw button.
+    pub stroke_modes: [u8; MAX_PLANNED_STROKES],
 }
 
 impl Default for SimOptions {
@@ -42,6 +45,7 @@ impl Default for SimOptions {
             images: true,
             object: None,
             truth: true,
+            stroke_modes: [0; MAX_PLANNED_STROKES],
         }
     }
 }
@@ -212,7 +216,8 @@ pub fn run(
     opts: SimOptions,
 ) -> Result<SimSummary, SimError> {
     check_duration(duration_s)?;
-    let traj = build_trajectory(sc, seed, duration_s);
+    let mut traj = build_trajectory(sc, seed, duration_s);
+    traj.set_stroke_modes(&opts.stroke_modes);
     let meta = Meta::new(
         Source {
             kind: "simulator".to_string(),
@@ -281,7 +286,7 @@ pub fn run(
         let kin = kinematics(&traj, &sc.imu, t);
         let bias = imu.gyro_bias();
         let packet = imu.measure(&kin, k as u8, dt);
-        let buttons = u8::from(traj.button(t));
+        let buttons = traj.buttons(t);
         fw.on_sample(
             t,
             dev_us,
@@ -516,6 +521,7 @@ pub fn true_strokes(traj: &Trajectory, duration_s: f64) -> Vec<StrokeTruth> {
                     .filter(|id| drawn.contains(id))
                     .collect(),
                 tip_polyline_m,
+                mode: st.mode,
             }
         })
         .collect()

@@ -50,6 +50,7 @@ fn every_scenario_runs_and_says_what_its_cameras_provide() {
                 images,
                 truth: false,
                 object: None,
+                ..SimOptions::default()
             };
             let s = run_scenario(name, 2, 0.3, dir.path(), opts).unwrap();
             assert!(s.imu_samples >= 28 && s.frames.len() == 2, "{name}: {s:?}");

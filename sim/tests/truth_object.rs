@@ -311,6 +311,7 @@ fn a_simulated_recording_describes_its_object_and_scene() {
         images: false,
         truth: true,
         object: None,
+        ..SimOptions::default()
     };
     run_scenario("fires-v2", 3, 12.0, dir.path(), opts).unwrap();
     let r = RecordingReader::open(dir.path()).unwrap();

@@ -252,3 +252,88 @@ fn strokes_begun_before_the_world_is_accepted_are_retracked() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A mode button held while drawing reaches the curve network (curve network issue, item 4): the simulator
+/// holds the sharp mode while it draws stroke 2, the link carries it in the status packets, the tracker
+/// keeps it as the stroke's buttons, and the network built from the tracked strokes tags exactly that
+/// stroke's curves sharp.
+#[test]
+fn a_sharp_mode_stroke_is_a_sharp_curve_of_the_tracked_network() {
+    use fires_recon::network::{build_network, BuildOptions, PenMode, StrokeInput};
+    let dir = std::env::temp_dir().join(format!("fires-replay-modes-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut opts = SimOptions::default();
+    opts.stroke_modes[2] = 1;
+    run_scenario("fires-v1", 7, 18.0, &dir, opts).expect("simulate");
+    let reader = RecordingReader::open(&dir).expect("open");
+    let truth = reader.strokes().expect("truth").expect("simulated");
+    let modes: Vec<u8> = truth.iter().map(|s| s.mode).collect();
+    assert!(
+        truth.iter().filter(|s| s.complete).count() >= 4,
+        "{truth:?}"
+    );
+    assert!(
+        modes
+            .iter()
+            .enumerate()
+            .all(|(i, &m)| m == u8::from(i == 2)),
+        "{modes:?}"
+    );
+
+    let out = replay(&reader, &ReplayConfig::default()).expect("replay");
+    let sharp: Vec<u32> = out
+        .strokes
+        .iter()
+        .filter(|s| PenMode::from_mode(s.buttons >> 1) == PenMode::Sharp)
+        .map(|s| s.id)
+        .collect();
+    assert_eq!(
+        sharp.len(),
+        1,
+        "{:?}",
+        out.strokes
+            .iter()
+            .map(|s| (s.id, s.buttons))
+            .collect::<Vec<_>>()
+    );
+    // The sharp stroke is the one drawn while truth stroke 2 was.
+    let s = out
+        .strokes
+        .iter()
+        .find(|s| s.id == sharp[0])
+        .expect("stroke");
+    assert!(s.t_start_ns < truth[2].end_time_ns && s.t_end_ns > truth[2].start_time_ns);
+
+    let inputs: Vec<StrokeInput> = out
+        .strokes
+        .iter()
+        .filter(|s| !s.is_empty())
+        .map(|s| StrokeInput {
+            id: s.id,
+            points: s.polyline_m(),
+            closed: s.closed,
+            sigma_mm: None,
+            mode: s.buttons >> 1,
+            untracked_mm: s.untracked_mm(),
+        })
+        .collect();
+    let (net, report) = build_network(&inputs, &BuildOptions::default());
+    net.validate().expect("valid network");
+    assert!(report.used.contains(&sharp[0]), "{report:?}");
+    let mut tagged = 0;
+    for (_, p) in net.polylines() {
+        let is_sharp = p.attrs.stroke == Some(sharp[0]);
+        assert_eq!(
+            p.attrs.sharpness,
+            if is_sharp { 1.0 } else { 0.0 },
+            "{:?}",
+            p.attrs
+        );
+        tagged += usize::from(is_sharp);
+    }
+    assert!(
+        tagged >= 2,
+        "the sharp stroke crosses an earlier one: {tagged} pieces"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -16,8 +16,7 @@ fn a_mesh_of_the_true_drawn_region_measures_as_the_true_object() {
     let dir = tempfile::tempdir().unwrap();
     let opts = SimOptions {
         images: false,
-        truth: true,
-        object: None,
+        ..SimOptions::default()
     };
     run_scenario("fires-v2", 1, 12.0, dir.path(), opts).unwrap();
     let r = RecordingReader::open(dir.path()).unwrap();

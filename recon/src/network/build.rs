@@ -31,6 +31,11 @@ pub struct StrokeInput {
     pub sigma_mm: Option<f64>,
     /// The pen mode held at pen-down: the strokes file's `buttons >> 1` (see [`PenMode`]).
     pub mode: u8,
+    /// How far the pen may have drawn before the first and after the last point without being
+    /// tracked, millimetres (`fires_record::Stroke::untracked_mm`; 0 for complete strokes). Curve
+    /// insertion looks that much further along the stroke's end for the curve it started or ended on
+    /// ([`CurveInput::untracked_mm`]).
+    pub untracked_mm: [f64; 2],
 }
 
 /// The tool a pen mode selects (the mode buttons are bits 1–3 of the strokes file's `buttons`; the
@@ -118,6 +123,7 @@ fn curve(s: &StrokeInput) -> CurveInput<'_> {
         points: &s.points,
         stroke: Some(s.id),
         sigma_mm: s.sigma_mm,
+        untracked_mm: s.untracked_mm,
     }
 }
 
@@ -159,6 +165,7 @@ pub fn build_network(strokes: &[StrokeInput], options: &BuildOptions) -> (Networ
                 Ok(m) => prepared.push(StrokeInput {
                     points: m.points,
                     closed: true,
+                    untracked_mm: [0.0; 2],
                     ..s.clone()
                 }),
                 Err(e) => report.rejected.push(rejected(s.id, &e)),

@@ -8,9 +8,10 @@ use serde::{Deserialize, Serialize};
 use super::build::StrokeInput;
 use super::mesh::Network;
 use super::tools::{
-    close_boundary, create_hole, delete_stroke, glue_borders, glue_tube, insert_boundary,
-    insert_curve, mirror_curve, skin_profiles, tag_sharp, BoundaryOptions, CloseOptions,
-    CurveInput, GlueOptions, HoleOptions, InsertOptions, SkinOptions, ToolError, TubeOptions,
+    align_curves, close_boundary, create_hole, delete_stroke, glue_borders, glue_tube,
+    insert_boundary, insert_curve, mirror_curve, skin_profiles, tag_sharp, transform_network,
+    AlignOptions, BoundaryOptions, CloseOptions, CurveInput, GlueOptions, HoleOptions,
+    InsertOptions, SkinOptions, ToolError, TubeOptions,
 };
 
 /// The `format` value of a journal.
@@ -87,6 +88,18 @@ pub enum Step {
         #[serde(default)]
         options: TubeOptions,
     },
+    /// Alignment of a moved object (thesis §5.3): the network's curves of stroke `reference` are
+    /// matched to stroke `object`, the same curve drawn again on the moved object (not inserted), and
+    /// the whole network is moved onto it.
+    Align {
+        /// The stroke whose curves in the network are the reference.
+        reference: u32,
+        /// The redrawn stroke.
+        object: u32,
+        /// ICP iterations after the PCA guess (0: PCA only, as in the thesis).
+        #[serde(default = "default_icp_iterations")]
+        icp_iterations: usize,
+    },
     /// Skinning: closed profile strokes in order and two spine strokes.
     Skin {
         /// The profiles, in order along the spines.
@@ -97,6 +110,10 @@ pub enum Step {
         #[serde(default)]
         options: SkinOptions,
     },
+}
+
+fn default_icp_iterations() -> usize {
+    AlignOptions::default().icp_iterations
 }
 
 /// A whole journal document.
@@ -215,6 +232,33 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
                     .map_err(|error| JournalError::Refused { step, error })?;
                 continue;
             }
+            Step::Align {
+                reference,
+                object,
+                icp_iterations,
+            } => {
+                let object = find(strokes, step, *object)?;
+                let reference_points: Vec<[f64; 3]> = net
+                    .polylines()
+                    .filter(|(_, p)| p.attrs.stroke == Some(*reference))
+                    .flat_map(|(_, p)| p.points.iter().copied())
+                    .collect();
+                if reference_points.is_empty() {
+                    return Err(JournalError::Refused {
+                        step,
+                        error: ToolError::BadCurve(format!(
+                            "stroke {reference} has no curve in the network to align"
+                        )),
+                    });
+                }
+                let options = AlignOptions {
+                    icp_iterations: *icp_iterations,
+                };
+                let a = align_curves(&reference_points, &object.points, &options)
+                    .map_err(|error| JournalError::Refused { step, error })?;
+                transform_network(&mut net, &a);
+                continue;
+            }
         };
         let st = strokes
             .iter()
@@ -232,6 +276,12 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
             points: mirrored.as_deref().unwrap_or(&st.points),
             stroke: Some(st.id),
             sigma_mm: st.sigma_mm,
+            // A mirrored curve's ends are not where the pen was.
+            untracked_mm: if mirrored.is_some() {
+                [0.0; 2]
+            } else {
+                st.untracked_mm
+            },
         };
         let r = match s {
             Step::Boundary { close_mm, .. } => insert_boundary(
@@ -249,6 +299,7 @@ pub fn replay(journal: &Journal, strokes: &[StrokeInput]) -> Result<Network, Jou
             | Step::Sharp { .. }
             | Step::Glue { .. }
             | Step::Skin { .. }
+            | Step::Align { .. }
             | Step::Tube { .. } => Ok(()),
         };
         r.map_err(|error| JournalError::Refused { step, error })?;
@@ -268,5 +319,6 @@ fn curve(s: &StrokeInput) -> CurveInput<'_> {
         points: &s.points,
         stroke: Some(s.id),
         sigma_mm: s.sigma_mm,
+        untracked_mm: s.untracked_mm,
     }
 }

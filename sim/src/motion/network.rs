@@ -148,13 +148,19 @@ pub struct PlannedStroke {
     pub ends_on: Option<u32>,
     /// Earlier strokes crossed in the interior.
     pub crosses: Vec<u32>,
+    /// Pen mode held while drawing it (the mode buttons, `buttons >> 1`; 0: curve insertion).
+    pub mode: u8,
 }
 
 /// Chord offsets of one family, as fractions of `rho`, in drawing order: the middle first, then outwards,
-/// so the network grows like a grid. Neighbours are 0.3 `rho` apart (14 mm on the default scene), almost
-/// twice the curve network's 8 mm snapping distance, so no crossing lands within snapping distance of a
-/// junction it does not belong to; a denser plan would make truth the network cannot represent.
-const CHORD_OFFSETS: [f64; 5] = [0.0, -0.3, 0.3, -0.6, 0.6];
+/// so the network grows like a grid. Neighbours are 0.225 `rho` apart (10 mm on the default scene; with the
+/// random tilts, offsets and bows, junctions stay at least 0.15 `rho` apart), and the outermost chords stay
+/// at 0.45 `rho`, so the corner where two of them cross lies at least 0.3 `rho` (13 mm) from their ends on
+/// the boundary even where the boundary dips to 0.88 `rho` (`tests/motion.rs` checks both over 400 seeds). The network's insertion rules take a crossing within the
+/// snapping distance plus the intersection threshold (13 mm) of a stroke's end on the network for an
+/// overshoot, so a tighter corner would make truth the network cannot represent (the offsets were
+/// 0.3 and 0.6 `rho`, whose corners came within 7 mm of the boundary).
+const CHORD_OFFSETS: [f64; 5] = [0.0, -0.225, 0.225, -0.45, 0.45];
 
 /// The most strokes [`plan_network`] plans: the boundary and two families of [`CHORD_OFFSETS`] chords.
 pub const MAX_PLANNED_STROKES: usize = 1 + 2 * CHORD_OFFSETS.len();
@@ -187,6 +193,7 @@ pub fn plan_network(rho: f64, count: usize, rng: &mut SimRng) -> Vec<PlannedStro
         starts_on: None,
         ends_on: None,
         crosses: Vec::new(),
+        mode: 0,
     }];
     let alpha0 = rng.range(0.0, std::f64::consts::PI);
     for k in 1..count {
@@ -237,6 +244,7 @@ pub fn plan_network(rho: f64, count: usize, rng: &mut SimRng) -> Vec<PlannedStro
             starts_on: Some(0),
             ends_on: Some(ends_on),
             crosses: crosses.into_iter().filter(|&id| id != ends_on).collect(),
+            mode: 0,
         });
     }
     out

@@ -310,6 +310,25 @@ impl Trajectory {
         self.stroke_times.iter().any(|&(_, a, b)| t >= a && t < b)
     }
 
+    /// The pen's button bits at time `t`: bit 0 (draw) while a stroke is drawn, with that stroke's
+    /// pen mode on the mode buttons (bits 1–3, as the status packet carries them), 0 between strokes.
+    pub fn buttons(&self, t: f64) -> u8 {
+        self.stroke_times
+            .iter()
+            .find(|&&(_, a, b)| t >= a && t < b)
+            .map_or(0, |&(idx, _, _)| 1 | (self.strokes[idx].mode & 0b111) << 1)
+    }
+
+    /// Sets the pen mode held while drawing each planned stroke: `modes[id]` for stroke `id` (strokes
+    /// beyond `modes` keep theirs; the curve network maps modes to tools, docs/network.md).
+    pub fn set_stroke_modes(&mut self, modes: &[u8]) {
+        for s in &mut self.strokes {
+            if let Some(&m) = modes.get(s.id as usize) {
+                s.mode = m & 0b111;
+            }
+        }
+    }
+
     /// Pen pose at time `t` (seconds; clamped to the timeline).
     pub fn pose(&self, t: f64) -> Pose {
         let Some(last) = self.segs.last() else {

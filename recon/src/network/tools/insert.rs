@@ -12,6 +12,10 @@
 //! * **Strokes as people draw them.** An end that stops short of the network by at most the snapping
 //!   distance is extended by a straight segment to the nearest network point; an end that overshoots the
 //!   first (last) crossing by at most `overshoot_mm` is trimmed there. Both are reported.
+//! * **Ends the tracker lost.** An end the pen drew without being tracked (`untracked_mm`, the strokes
+//!   file's button time against its first or last point) is first continued along its tangent, by at
+//!   most that length and `overshoot_mm`, to the first curve the continuation meets (reported as an
+//!   extension): the stroke began or ended on that curve, and its tracked end is not an overshoot.
 //! * **Rule 1.** No piece of the curve may start and end on one polyline (that would make a two-sided face).
 //! * **Rule 2.** Consecutive meeting points must share a face: a curve that passes over another without
 //!   coming within the threshold, or leaves the surface, is refused.
@@ -38,7 +42,7 @@ pub struct InsertOptions {
     pub snap_mm: f64,
     /// Meeting points (crossings and ends) this close to an end vertex of their edge go onto that vertex.
     /// Smaller than `snap_mm`: a curve crossing another this close to a junction is taken to pass through
-    /// it; the simulator's grid keeps its junctions 14 mm apart.
+    /// it; the simulator's grid keeps its junctions about 9 mm apart or more.
     pub vertex_snap_mm: f64,
     /// Longest tail past the first or last crossing that is trimmed.
     pub overshoot_mm: f64,
@@ -139,6 +143,21 @@ pub fn insert_curve(
     let thr = widened_m(options.intersect_mm, curve.sigma_mm, options.sigma_factor);
     let snap = widened_m(options.snap_mm, curve.sigma_mm, options.sigma_factor);
     let vertex_snap = widened_m(options.vertex_snap_mm, curve.sigma_mm, options.sigma_factor);
+    // Ends the tracker lost: continue them along their tangent to the curve they began or ended on.
+    let mut untracked = Vec::new();
+    for (k, end) in [End::Start, End::End].into_iter().enumerate() {
+        let reach = curve.untracked_mm[k].min(options.overshoot_mm);
+        if !(reach.is_finite() && reach > 0.0) {
+            continue;
+        }
+        if let Some((p, gap_mm)) = untracked_end(net, &pts, end, reach * 1e-3, thr) {
+            match end {
+                End::Start => pts.insert(0, p),
+                End::End => pts.push(p),
+            }
+            untracked.push(Adjustment::Extended { end, gap_mm });
+        }
+    }
     let mut arc = arcs(&pts);
     let (mut hits, mut near_ends) = find_hits(net, &pts, &arc, thr, snap);
     // A closed curve whose ends are not on the network starts and ends at its first crossing (thesis
@@ -182,7 +201,7 @@ pub fn insert_curve(
         over: options.overshoot_mm * 1e-3,
         report: options.intersect_mm * 1e-3,
     };
-    let mut adjustments = Vec::new();
+    let mut adjustments = untracked;
     let (start, adj) = ctx.resolve_end(End::Start)?;
     adjustments.extend(adj);
     let (mut end, adj) = ctx.resolve_end(End::End)?;
@@ -258,6 +277,39 @@ pub fn insert_curve(
     Ok((report, txn))
 }
 
+/// Where an untracked end meets the network: the first network point within `thr` of the end's
+/// tangent ray, at most `reach` metres out, and the length added (mm). None when the end is already
+/// within `thr` of the network or the ray meets nothing. The tangent is the chord over the last
+/// [`TANGENT_M`] of the curve, so one noisy point does not turn it.
+fn untracked_end(net: &Network, pts: &[P3], end: End, reach: f64, thr: f64) -> Option<(P3, f64)> {
+    let ordered: Vec<P3> = match end {
+        End::Start => pts.to_vec(),
+        End::End => pts.iter().rev().copied().collect(),
+    };
+    let e = *ordered.first()?;
+    if nearest_point(net, e, thr).is_some() {
+        return None;
+    }
+    let inner = ordered
+        .iter()
+        .find(|q| gap(**q, e) >= TANGENT_M)
+        .or(ordered.last())
+        .copied()?;
+    let len = gap(e, inner);
+    if len <= SAME_POINT_M {
+        return None;
+    }
+    let dir = [0, 1, 2].map(|k| (e[k] - inner[k]) / len);
+    let far = [0, 1, 2].map(|k| e[k] + dir[k] * reach);
+    let ray = [e, far];
+    let (hits, _) = find_hits(net, &ray, &arcs(&ray), thr, 0.0);
+    let h = hits.first()?;
+    Some((h.point, gap(e, h.point) * 1e3))
+}
+
+/// Length of curve over which [`untracked_end`] takes an end's tangent, metres.
+const TANGENT_M: f64 = 0.01;
+
 impl Ctx<'_> {
     fn along(&self, end: End, h: &Hit) -> f64 {
         match end {
@@ -311,9 +363,22 @@ impl Ctx<'_> {
             End::Start => self.pts[0],
             End::End => self.pts[self.pts.len() - 1],
         };
+        let near = self.near_ends[match end {
+            End::Start => 0,
+            End::End => 1,
+        }];
+        // The outermost meeting point, except that a curve whose closest approach to an edge is its own
+        // end point does not cross that edge: when another edge is nearer to that end, the end is on
+        // the nearer one, and the farther approach is no meeting at all (a stroke ending on a curve a
+        // few millimetres from where that curve meets a third one).
+        let farther_end_approach = |h: &&Hit| {
+            near.is_some_and(|n| {
+                self.along(end, h) <= SAME_POINT_M && h.edge != n.edge && h.distance > n.distance
+            })
+        };
         let first = match end {
-            End::Start => self.hits.first(),
-            End::End => self.hits.last(),
+            End::Start => self.hits.iter().find(|h| !farther_end_approach(h)),
+            End::End => self.hits.iter().rev().find(|h| !farther_end_approach(h)),
         };
         // Adjustments shorter than the (unwidened) intersection threshold are ordinary drawing and not
         // reported.
@@ -334,10 +399,6 @@ impl Ctx<'_> {
             };
             (self.stop_of(h, h.sigma), adj)
         };
-        let near = self.near_ends[match end {
-            End::Start => 0,
-            End::End => 1,
-        }];
         if let Some(near) = near {
             if let Some(h) = first {
                 let on_it =

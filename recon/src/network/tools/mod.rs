@@ -47,6 +47,11 @@ pub struct CurveInput<'a> {
     pub stroke: Option<u32>,
     /// The curve's largest one-sigma position uncertainty, millimetres (widens the thresholds).
     pub sigma_mm: Option<f64>,
+    /// Length the pen may have drawn past the first and the last point without being tracked,
+    /// millimetres (0: the curve is complete). Curve insertion extends such an end along its
+    /// tangent, by at most this and `overshoot_mm`, to the first curve it meets, instead of taking
+    /// the end for an overshoot.
+    pub untracked_mm: [f64; 2],
 }
 
 impl<'a> CurveInput<'a> {
@@ -56,6 +61,7 @@ impl<'a> CurveInput<'a> {
             points,
             stroke: None,
             sigma_mm: None,
+            untracked_mm: [0.0; 2],
         }
     }
 }
