@@ -7,7 +7,8 @@ use std::time::Instant;
 
 use common::disc::grid_drawing;
 use fires_recon::network::tools::{
-    delete_stroke, insert_curve, tag_sharp, transform_network, Alignment, CurveInput, InsertOptions,
+    align_curves, delete_stroke, insert_curve, mirror_curve, tag_sharp, transform_network,
+    AlignOptions, Alignment, CurveInput, InsertOptions,
 };
 use fires_recon::network::{build_network, BuildOptions, Network, StrokeInput};
 
@@ -111,6 +112,43 @@ fn bench_network_tools() {
     {
         res.push(format!(
             "{{\"tool\":\"{name}\",\"faces\":100,\"median_ms\":{:.4}}}",
+            median_ms(t)
+        ));
+    }
+    // Mirroring a drawn curve and aligning a redrawn one (a bowed 133-point curve; alignment with up
+    // to the default 30 ICP iterations), then moving the network by the result.
+    let bowed: Vec<[f64; 3]> = diagonal
+        .iter()
+        .enumerate()
+        .map(|(i, p)| [p[0], p[1], p[2] + 0.01 * (i as f64 / 20.0).sin()])
+        .collect();
+    // Redrawn on the object turned 90° and moved 10 mm, with 0.3 mm of drawing noise and other samples.
+    let redrawn: Vec<[f64; 3]> = bowed
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let n = 3e-4 * ((i as f64 * 1.7).sin() + (i as f64 * 0.61).cos()) / 2.0;
+            [-p[1] + 0.01 + n, p[0] - n, p[2] + n]
+        })
+        .collect();
+    let mut times = [Vec::new(), Vec::new()];
+    for _ in 0..51 {
+        let t0 = Instant::now();
+        std::hint::black_box(mirror_curve(&bowed).unwrap());
+        times[0].push(t0.elapsed().as_secs_f64() * 1e3);
+        let mut n = net.clone();
+        let t0 = Instant::now();
+        let a = align_curves(&bowed, &redrawn, &AlignOptions::default()).unwrap();
+        transform_network(&mut n, &a);
+        times[1].push(t0.elapsed().as_secs_f64() * 1e3);
+    }
+    for (name, t) in ["mirror_curve", "align_curves+transform_network"]
+        .iter()
+        .zip(times)
+    {
+        res.push(format!(
+            "{{\"tool\":\"{name}\",\"faces\":100,\"points\":{},\"median_ms\":{:.4}}}",
+            bowed.len(),
             median_ms(t)
         ));
     }

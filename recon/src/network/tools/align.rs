@@ -240,6 +240,9 @@ pub fn quaternion_matrix([w, x, y, z]: [f64; 4]) -> [[f64; 3]; 3] {
     ]
 }
 
+/// ICP stops when no entry of the rotation (or translation, metres) moves by more than this.
+const ICP_CONVERGED: f64 = 1e-12;
+
 /// The rigid motion that carries `reference` (a curve of the network) onto `object` (the same curve
 /// drawn on the moved object). Point order and count may differ.
 pub fn align_curves(
@@ -281,7 +284,17 @@ pub fn align_curves(
             .iter()
             .map(|&p| (p, nearest(object, a.apply(p))))
             .collect();
-        a = horn(&pairs);
+        let next = horn(&pairs);
+        // Converged (Besl & McKay §III stop when the fit no longer changes): the same pairs again.
+        let moved = (0..3)
+            .flat_map(|i| (0..3).map(move |j| (i, j)))
+            .map(|(i, j)| (next.rotation[i][j] - a.rotation[i][j]).abs())
+            .chain((0..3).map(|i| (next.translation[i] - a.translation[i]).abs()))
+            .fold(0.0, f64::max);
+        a = next;
+        if moved < ICP_CONVERGED {
+            break;
+        }
     }
     a.rms_m = (score(&a, reference, object) / reference.len() as f64).sqrt();
     a.ambiguous = ratio_r.min(ratio_o) < 1.05;
