@@ -20,7 +20,9 @@
 //!   at least two neighbours and is centred on their segment (at least one such merge), and every
 //!   blob on the pen's image is one of these; only an end LED that the clear camera sees may be
 //!   hidden there (by the hand), and is left out (it has no stereo pair);
-//! * the pen points the way the fused direction does;
+//! * the pen points the way the fused direction does, while the tracker has that prior (after a
+//!   loss longer than the prior's timeout, the geometry alone decides, as in identification: an
+//!   uncorrected inertial direction may have drifted beyond any bound);
 //! * no other labelling (other camera crowded, other LEDs, the mirrored pen, other blobs) passes.
 //!
 //! The LEDs' points are the clear camera's rays met with the crowded camera's pen plane; the
@@ -98,11 +100,12 @@ impl Tracker {
     /// refused for want of stereo candidates (not for a conflict) or the safety refused fewer than
     /// three LEDs for crowded images. Adds the labelled LEDs' candidates to the pair's.
     pub(super) fn complete_pen_line(&mut self, t: u64) -> Option<Identification> {
-        // The fused direction, also while it is stale (the identifier's prior).
-        let (direction, _) = self.direction.prior(t)?;
+        // The fused direction, also while it is stale (the identifier's prior); None after the
+        // prior's timeout.
+        let direction = self.direction.prior(t).map(|(d, _)| d);
         self.direction.world()?;
         let options = LineOptions::from_config(&self.config);
-        let found = label_pen_line(&self.pair_view(t), &options, &direction)?;
+        let found = label_pen_line(&self.pair_view(t), &options, direction.as_ref())?;
         let sigma = self.config.correspondence.pixel_sigma;
         let pixel_sigma = [
             sigma / self.rig.left.focal_px(),
@@ -153,11 +156,12 @@ impl Tracker {
 const MIN_SINE: f64 = 0.15;
 
 /// The unique labelling along the pen's line, with the pen pointing within
-/// `options.prior_min_cos` of `direction` (towards the tip), or None (none, or several).
+/// `options.prior_min_cos` of `direction` (towards the tip) when there is one, or None (none, or
+/// several).
 pub(super) fn label_pen_line(
     pair: &PairView<'_>,
     options: &LineOptions,
-    direction: &Vector3<f64>,
+    direction: Option<&Vector3<f64>>,
 ) -> Option<LineLabelling> {
     let mut found: Option<LineLabelling> = None;
     for crowded in [CameraId::Left, CameraId::Right] {
@@ -338,7 +342,7 @@ fn labellings(
     crowded: CameraId,
     plane_c: &(Vector3<f64>, Vector3<f64>),
     set_k: &u32,
-    direction: &Vector3<f64>,
+    direction: Option<&Vector3<f64>>,
 ) -> Vec<LineLabelling> {
     let clear = other(crowded);
     let norm_k = normals(pair, clear);
@@ -401,7 +405,7 @@ fn labellings(
                 continue;
             }
             // The pen points from its LEDs towards the tip, against increasing offsets.
-            if direction.dot(&(-sign * u)) < options.prior_min_cos * direction.norm() {
+            if direction.is_some_and(|d| d.dot(&(-sign * u)) < options.prior_min_cos * d.norm()) {
                 continue;
             }
             let (s0, p0) = (along[0].0, along[0].2);
@@ -513,18 +517,17 @@ fn crowded_image_explained(
     let (px, radii) = images(pair, camera, model)?;
     let blobs = pair.points.pixels(camera);
     let shapes = frame(pair, camera).map_or(&[][..], |f| &f.shapes[..]);
+    // Each LED's blob: the nearest of those whose extent covers it (a small spot next to a long
+    // merge may be nearer by centroid while the merge covers the LED).
+    let covers = |n: usize, p: [f64; 2]| match shapes.get(n) {
+        Some(shape) => within_extent(shape, blobs[n], p, options.gate_px),
+        None => dist(blobs[n], p) <= options.gate_px.max(radii.get(n).copied().unwrap_or(0.0)),
+    };
     let mut blob = [None; LED_COUNT];
     for k in 0..LED_COUNT {
-        let (n, d) = blobs
-            .iter()
-            .map(|&q| dist(q, px[k]))
-            .enumerate()
-            .min_by(|x, y| x.1.total_cmp(&y.1))?;
-        let covered = match shapes.get(n) {
-            Some(shape) => within_extent(shape, blobs[n], px[k], options.gate_px),
-            None => d <= options.gate_px.max(radii.get(n).copied().unwrap_or(0.0)),
-        };
-        blob[k] = covered.then_some(n);
+        blob[k] = (0..blobs.len())
+            .filter(|&n| covers(n, px[k]))
+            .min_by(|&x, &y| dist(blobs[x], px[k]).total_cmp(&dist(blobs[y], px[k])));
     }
     let hidden: Vec<usize> = (0..LED_COUNT).filter(|&k| blob[k].is_none()).collect();
     let end = |k: usize| k == 0 || k == LED_COUNT - 1;

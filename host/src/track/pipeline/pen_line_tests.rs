@@ -98,7 +98,7 @@ fn label(s: &Scene, direction: &Vector3<f64>) -> Option<super::pen_line::LineLab
         tip: &s.tip,
         t: T,
     };
-    label_pen_line(&pair, &options(&s.pen), direction)
+    label_pen_line(&pair, &options(&s.pen), Some(direction))
 }
 
 /// The pen's direction towards its tip.
@@ -136,6 +136,29 @@ fn leds_merged_in_one_camera_are_located_along_the_pen_line() {
 fn a_pen_against_the_fused_direction_is_refused() {
     let s = scene(|_, _| {});
     assert!(label(&s, &-towards_tip(&s)).is_none());
+}
+
+/// Without a direction prior (lost longer than its timeout) the geometry alone decides: the
+/// spacing tells the pen from its mirror image, so the labelling is the same.
+#[test]
+fn without_a_prior_the_spacing_alone_labels_the_pen() {
+    let s = scene(|_, _| {});
+    let pair = PairView {
+        rig: &s.rig,
+        align: &s.align,
+        points: &s.points,
+        candidates: &s.candidates.candidates,
+        tip: &s.tip,
+        t: T,
+    };
+    let alone = label_pen_line(&pair, &options(&s.pen), None).expect("a labelling");
+    let with = label(&s, &towards_tip(&s)).expect("a labelling");
+    for k in 0..4 {
+        assert_eq!(
+            alone.leds[k].map(|l| (l.clear_blob, l.crowded_blob)),
+            with.leds[k].map(|l| (l.clear_blob, l.crowded_blob))
+        );
+    }
 }
 
 /// Both images must be explained: a merged blob pushed 5 px off the pen's line, a blob between
