@@ -33,7 +33,13 @@ def main():
     h = (pts - c) @ n
     # Subsample evenly so the dense system stays small (the curves are sampled every 10 ms of drawing).
     step = max(1, len(pts) // a.max_points)
-    rbf = RBFInterpolator(uv[::step], h[::step], kernel="thin_plate_spline")
+    uv_s, h_s = uv[::step], h[::step]
+    # One sample per 0.1 mm cell: curves meet at junctions and the pen starts each stroke from rest,
+    # and repeated points make the interpolation system singular.
+    _, keep = np.unique(np.round(uv_s / 1e-4), axis=0, return_index=True)
+    keep.sort()
+    uv_s, h_s = uv_s[keep], h_s[keep]
+    rbf = RBFInterpolator(uv_s, h_s, kernel="thin_plate_spline")
     # Grid over the boundary polygon (projected), even-odd inside test.
     buv = np.c_[(boundary - c) @ e1, (boundary - c) @ e2]
     s = a.spacing_mm * 1e-3
@@ -67,7 +73,7 @@ def main():
             if min(quad) >= 0:
                 lines.append("f %d %d %d %d" % tuple(x + 1 for x in quad))
     open(a.out, "w").write("\n".join(lines) + "\n")
-    print(json.dumps({"points": int(len(uv[::step])), "vertices": k}))
+    print(json.dumps({"points": int(len(uv_s)), "vertices": k}))
 
 
 if __name__ == "__main__":
