@@ -260,3 +260,59 @@ fn an_end_led_hidden_in_the_crowded_camera_is_left_out() {
     });
     assert!(label(&inner, &towards_tip(&inner)).is_none());
 }
+
+/// Each LED's crowded-camera blob is the nearest blob whose extent covers it, not the nearest
+/// centroid: LED 1 has a small spot of its own on the right, and LEDs 2-4 smear into one streak
+/// whose centroid lies towards LED 4, so LED 2 is nearer LED 1's spot than the streak's centre
+/// while only the streak covers it (webcam seed 8, 23 s at rest). LED 1 is hidden from the left
+/// camera; LEDs 2-4 are labelled at their exact positions, each on the streak.
+#[test]
+fn a_led_covered_by_a_streak_is_not_given_a_nearer_spot() {
+    let (rig, pen, leds, mut left, _) = merged_spot_scene(T, 1);
+    left.blobs.remove(0);
+    left.radii.remove(0);
+    let px: Vec<[f64; 2]> = leds
+        .iter()
+        .map(|p| rig.project(CameraId::Right, p).unwrap())
+        .collect();
+    let (a, b) = (px[1], px[LED_COUNT - 1]);
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let centre = [a[0] + 0.85 * dx, a[1] + 0.85 * dy];
+    let dist = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
+    assert!(
+        dist(px[1], px[0]) < dist(px[1], centre),
+        "the scene must put LED 2 nearer LED 1's spot"
+    );
+    let (along, across) = (0.2 * len2, 4.0);
+    let (ux, uy) = (dx / len2.sqrt(), dy / len2.sqrt());
+    let streak = [
+        along * ux * ux + across * uy * uy,
+        (along - across) * ux * uy,
+        along * uy * uy + across * ux * ux,
+    ];
+    let right = CameraFrame {
+        radii: vec![2.0, (len2.sqrt() * 0.5).max(3.0)],
+        shapes: vec![[1.0, 0.0, 1.0], streak],
+        ..CameraFrame::new(CameraId::Right, T, vec![px[0], centre])
+    };
+    let (_, align, points) = prepared(&rig, pen, left, right);
+    let s = Scene {
+        rig,
+        pen,
+        leds,
+        align,
+        points,
+        candidates: Correspondences::default(),
+        tip: TipEstimator::new(&pen),
+    };
+    let l = label(&s, &towards_tip(&s)).expect("a pen-line labelling");
+    assert_eq!(l.crowded, CameraId::Right);
+    assert!(l.leds[0].is_none());
+    for k in 1..LED_COUNT {
+        let led = l.leds[k].unwrap();
+        assert_eq!(led.crowded_blob, 1, "LED {} on the streak", k + 1);
+        let err = (led.point - s.leds[k]).norm();
+        assert!(err < 1e-9, "LED {} off by {err} m", k + 1);
+    }
+}
