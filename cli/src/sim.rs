@@ -4,6 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
+use fires_recon::network::PenMode;
 use fires_sim::motion::MAX_PLANNED_STROKES;
 use fires_sim::objects::ObjectKind;
 use fires_sim::{run_scenario, SimOptions, SimSummary, SCENARIOS};
@@ -47,9 +48,6 @@ pub struct SimArgs {
     pub modes: Vec<(u32, u8)>,
 }
 
-/// The pen modes by name, in mode order (docs/network.md).
-const MODE_NAMES: [&str; 6] = ["insert", "sharp", "mirror", "hole", "glue", "skin"];
-
 fn parse_stroke_mode(s: &str) -> Result<(u32, u8), String> {
     let (id, mode) = s
         .split_once('=')
@@ -65,12 +63,12 @@ fn parse_stroke_mode(s: &str) -> Result<(u32, u8), String> {
         ));
     }
     let mode = mode.trim();
-    let m = match MODE_NAMES.iter().position(|&n| n == mode) {
+    let m = match PenMode::NAMES.iter().position(|&n| n == mode) {
         Some(m) => m as u8,
         None => mode.parse::<u8>().ok().filter(|&m| m < 8).ok_or_else(|| {
             format!(
                 "'{s}': unknown mode '{mode}' ({} or 0-7)",
-                MODE_NAMES.join(", ")
+                PenMode::NAMES.join(", ")
             )
         })?,
     };

@@ -259,7 +259,7 @@ fn strokes_begun_before_the_world_is_accepted_are_retracked() {
 /// stroke's curves sharp.
 #[test]
 fn a_sharp_mode_stroke_is_a_sharp_curve_of_the_tracked_network() {
-    use fires_recon::network::{build_network, BuildOptions, PenMode, StrokeInput};
+    use fires_recon::network::{build_network, BuildOptions, PenMode};
     let dir = std::env::temp_dir().join(format!("fires-replay-modes-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let mut opts = SimOptions::default();
@@ -304,19 +304,9 @@ fn a_sharp_mode_stroke_is_a_sharp_curve_of_the_tracked_network() {
         .expect("stroke");
     assert!(s.t_start_ns < truth[2].end_time_ns && s.t_end_ns > truth[2].start_time_ns);
 
-    let inputs: Vec<StrokeInput> = out
-        .strokes
-        .iter()
-        .filter(|s| !s.is_empty())
-        .map(|s| StrokeInput {
-            id: s.id,
-            points: s.polyline_m(),
-            closed: s.closed,
-            sigma_mm: None,
-            mode: s.buttons >> 1,
-            untracked_mm: s.untracked_mm(),
-        })
-        .collect();
+    // The strokes as `fires replay` hands them to the network.
+    let inputs =
+        fires_cli::network::tracked_inputs(&fires_record::StrokesFile::new(out.strokes.clone()));
     let (net, report) = build_network(&inputs, &BuildOptions::default());
     net.validate().expect("valid network");
     assert!(report.used.contains(&sharp[0]), "{report:?}");

@@ -62,6 +62,9 @@ pub enum PenMode {
 }
 
 impl PenMode {
+    /// The names of modes 0–5, in mode order (`fires sim --mode ID=NAME`, docs/network.md).
+    pub const NAMES: [&'static str; 6] = ["insert", "sharp", "mirror", "hole", "glue", "skin"];
+
     /// The mode of a stroke's mode value (`buttons >> 1`).
     pub fn from_mode(mode: u8) -> Self {
         match mode & 0b111 {

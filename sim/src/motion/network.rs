@@ -153,13 +153,14 @@ pub struct PlannedStroke {
 }
 
 /// Chord offsets of one family, as fractions of `rho`, in drawing order: the middle first, then outwards,
-/// so the network grows like a grid. Neighbours are 0.225 `rho` apart (10 mm on the default scene; with the
-/// random tilts, offsets and bows, junctions stay at least 0.15 `rho` apart), and the outermost chords stay
-/// at 0.45 `rho`, so the corner where two of them cross lies at least 0.3 `rho` (13 mm) from their ends on
-/// the boundary even where the boundary dips to 0.88 `rho` (`tests/motion.rs` checks both over 400 seeds). The network's insertion rules take a crossing within the
-/// snapping distance plus the intersection threshold (13 mm) of a stroke's end on the network for an
-/// overshoot, so a tighter corner would make truth the network cannot represent (the offsets were
-/// 0.3 and 0.6 `rho`, whose corners came within 7 mm of the boundary).
+/// so the network grows like a grid. Neighbours are 0.225 `rho` apart (10 mm on the default scene; with
+/// the random tilts, offsets and bows, junctions stay at least 0.15 `rho` apart), and the outermost chords
+/// stay at 0.45 `rho`, so the corner where two of them cross lies at least 0.3 `rho` (13 mm) from their
+/// ends on the boundary even where the boundary dips to 0.88 `rho` (`tests/motion.rs` checks both over
+/// 400 seeds). The network's insertion rules take a crossing within the snapping distance plus the
+/// intersection threshold (13 mm) of a stroke's end on the network for an overshoot, so a tighter corner
+/// would make truth the network cannot represent (the offsets were 0.3 and 0.6 `rho`, whose corners
+/// came within 0.05 `rho`, 2 mm, of the boundary).
 const CHORD_OFFSETS: [f64; 5] = [0.0, -0.225, 0.225, -0.45, 0.45];
 
 /// The most strokes [`plan_network`] plans: the boundary and two families of [`CHORD_OFFSETS`] chords.

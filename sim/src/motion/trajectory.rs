@@ -307,7 +307,7 @@ impl Trajectory {
 
     /// Whether the stroke button is held at time `t`.
     pub fn button(&self, t: f64) -> bool {
-        self.stroke_times.iter().any(|&(_, a, b)| t >= a && t < b)
+        self.buttons(t) & 1 != 0
     }
 
     /// The pen's button bits at time `t`: bit 0 (draw) while a stroke is drawn, with that stroke's

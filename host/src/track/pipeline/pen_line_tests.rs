@@ -90,6 +90,14 @@ fn options(pen: &PenGeometry) -> LineOptions {
 }
 
 fn label(s: &Scene, direction: &Vector3<f64>) -> Option<super::pen_line::LineLabelling> {
+    label_with(s, Some(direction))
+}
+
+/// The pen-line labelling of the scene, with or without a direction prior.
+fn label_with(
+    s: &Scene,
+    direction: Option<&Vector3<f64>>,
+) -> Option<super::pen_line::LineLabelling> {
     let pair = PairView {
         rig: &s.rig,
         align: &s.align,
@@ -98,7 +106,7 @@ fn label(s: &Scene, direction: &Vector3<f64>) -> Option<super::pen_line::LineLab
         tip: &s.tip,
         t: T,
     };
-    label_pen_line(&pair, &options(&s.pen), Some(direction))
+    label_pen_line(&pair, &options(&s.pen), direction)
 }
 
 /// The pen's direction towards its tip.
@@ -143,15 +151,7 @@ fn a_pen_against_the_fused_direction_is_refused() {
 #[test]
 fn without_a_prior_the_spacing_alone_labels_the_pen() {
     let s = scene(|_, _| {});
-    let pair = PairView {
-        rig: &s.rig,
-        align: &s.align,
-        points: &s.points,
-        candidates: &s.candidates.candidates,
-        tip: &s.tip,
-        t: T,
-    };
-    let alone = label_pen_line(&pair, &options(&s.pen), None).expect("a labelling");
+    let alone = label_with(&s, None).expect("a labelling");
     let with = label(&s, &towards_tip(&s)).expect("a labelling");
     for k in 0..4 {
         assert_eq!(
@@ -183,26 +183,46 @@ fn an_unexplained_image_is_refused() {
 /// a 2 px spot) and all four LEDs apart in the left camera.
 fn streak_scene() -> Scene {
     let (rig, pen, leds, left, _) = merged_spot_scene(T, 1);
-    let px: Vec<[f64; 2]> = leds
-        .iter()
-        .map(|p| rig.project(CameraId::Right, p).unwrap())
-        .collect();
+    let px = right_pixels(&rig, &leds);
     let (a, b) = (px[0], px[LED_COUNT - 1]);
     let centre = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+    let len2 = (b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2);
+    let right = CameraFrame {
+        radii: vec![(len2.sqrt() * 0.5).max(3.0)],
+        shapes: vec![streak_shape(a, b, len2 / 12.0)],
+        ..CameraFrame::new(CameraId::Right, T, vec![centre])
+    };
+    scene_of(rig, pen, leds, left, right)
+}
+
+/// The LEDs' pixels in the right camera.
+fn right_pixels(rig: &StereoRig, leds: &[Vector3<f64>; LED_COUNT]) -> Vec<[f64; 2]> {
+    leds.iter()
+        .map(|p| rig.project(CameraId::Right, p).unwrap())
+        .collect()
+}
+
+/// Second moments of a streak along `a` → `b` with variance `along` (px²) along it and a 2 px
+/// spot's 4 px² across.
+fn streak_shape(a: [f64; 2], b: [f64; 2], along: f64) -> [f64; 3] {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let len2 = dx * dx + dy * dy;
-    let (along, across) = (len2 / 12.0, 4.0);
-    let (ux, uy) = (dx / len2.sqrt(), dy / len2.sqrt());
-    let shape = [
+    let len = dx.hypot(dy);
+    let (ux, uy, across) = (dx / len, dy / len, 4.0);
+    [
         along * ux * ux + across * uy * uy,
         (along - across) * ux * uy,
         along * uy * uy + across * ux * ux,
-    ];
-    let right = CameraFrame {
-        radii: vec![(len2.sqrt() * 0.5).max(3.0)],
-        shapes: vec![shape],
-        ..CameraFrame::new(CameraId::Right, T, vec![centre])
-    };
+    ]
+}
+
+/// The scene of hand-made frames (no stereo candidates: point stereo finds none).
+fn scene_of(
+    rig: StereoRig,
+    pen: PenGeometry,
+    leds: [Vector3<f64>; LED_COUNT],
+    left: CameraFrame,
+    right: CameraFrame,
+) -> Scene {
     let (_, align, points) = prepared(&rig, pen, left, right);
     Scene {
         rig,
@@ -271,10 +291,7 @@ fn a_led_covered_by_a_streak_is_not_given_a_nearer_spot() {
     let (rig, pen, leds, mut left, _) = merged_spot_scene(T, 1);
     left.blobs.remove(0);
     left.radii.remove(0);
-    let px: Vec<[f64; 2]> = leds
-        .iter()
-        .map(|p| rig.project(CameraId::Right, p).unwrap())
-        .collect();
+    let px = right_pixels(&rig, &leds);
     let (a, b) = (px[1], px[LED_COUNT - 1]);
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let len2 = dx * dx + dy * dy;
@@ -284,28 +301,12 @@ fn a_led_covered_by_a_streak_is_not_given_a_nearer_spot() {
         dist(px[1], px[0]) < dist(px[1], centre),
         "the scene must put LED 2 nearer LED 1's spot"
     );
-    let (along, across) = (0.2 * len2, 4.0);
-    let (ux, uy) = (dx / len2.sqrt(), dy / len2.sqrt());
-    let streak = [
-        along * ux * ux + across * uy * uy,
-        (along - across) * ux * uy,
-        along * uy * uy + across * ux * ux,
-    ];
     let right = CameraFrame {
         radii: vec![2.0, (len2.sqrt() * 0.5).max(3.0)],
-        shapes: vec![[1.0, 0.0, 1.0], streak],
+        shapes: vec![[1.0, 0.0, 1.0], streak_shape(a, b, 0.2 * len2)],
         ..CameraFrame::new(CameraId::Right, T, vec![px[0], centre])
     };
-    let (_, align, points) = prepared(&rig, pen, left, right);
-    let s = Scene {
-        rig,
-        pen,
-        leds,
-        align,
-        points,
-        candidates: Correspondences::default(),
-        tip: TipEstimator::new(&pen),
-    };
+    let s = scene_of(rig, pen, leds, left, right);
     let l = label(&s, &towards_tip(&s)).expect("a pen-line labelling");
     assert_eq!(l.crowded, CameraId::Right);
     assert!(l.leds[0].is_none());
