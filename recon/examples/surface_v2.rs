@@ -12,7 +12,8 @@ use std::time::Instant;
 
 use fires_recon::network::{build_network, BuildOptions, StrokeInput};
 use fires_recon::surface::{
-    base_mesh, interpolating_control, subdivide, tessellate, SurfaceDiffusion, V2Options,
+    base_mesh, diffusion_options, interpolating_control, subdivide, tessellate, SurfaceDiffusion,
+    V2Options,
 };
 
 const R: f64 = 0.1;
@@ -92,7 +93,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let tb = Instant::now();
         let tess = tessellate(&base, &opts.tessellate)?;
         let tt = Instant::now();
-        let mut flow = SurfaceDiffusion::new(&tess, &opts.diffusion)?;
+        let mut flow = SurfaceDiffusion::new(&tess, &diffusion_options(&base, &opts))?;
         let tp = Instant::now();
         let refined = flow.run()?;
         let t1 = Instant::now();

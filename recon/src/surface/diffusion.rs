@@ -2,15 +2,15 @@
 //! `Δ_M H = 0` (surface diffusion, whose fixed points include spheres, cylinders and minimal surfaces)
 //! while its curve vertices stay on the drawn curves. Each outer iteration runs two second-order steps:
 //!
-//! * **STEP 1** (eq. 6.3, backward Euler, `inner_steps` times): `(M + τh̄²K_w) f⁺ = M f`, diffusing the
-//!   curvature field `f` with the sharpness-weighted Laplacian;
+//! * **STEP 1** (eq. 6.3, backward Euler, `inner_steps` times): `(M + Δt K_w) f⁺ = M f` with
+//!   `Δt = τℓ²/inner_steps`, diffusing the curvature field `f` with the sharpness-weighted Laplacian;
 //! * **STEP 2** (eqs. 6.4, 6.7–6.8): `min_X ‖C X − M δ̃‖² + λ‖S X − X₀‖²` (soft, the default) or the same
 //!   with `S X = X₀` imposed exactly ([`DiffusionOptions::hard`]).
 //!
 //! Operators ([`super::quad_cotan`]): `C` the cotangent matrix of the averaged quad triangulation
 //! (symmetric, negative semidefinite), `M` the barycentric vertex areas, `L = M⁻¹C ≈ Δ`, `K_w` the
 //! stiffness with sharpness weights, `S` the selection of the curve vertices (tagged on a curve or a
-//! corner), `h̄` the mean edge length of the input.
+//! corner), `h̄` the mean edge length of the input, ℓ the grid length (below, "Scale").
 //!
 //! Each choice the thesis leaves open or prints inconsistently, and what is done here:
 //! * **Sign.** The field is the δ-coordinates `δ = L X` computed with the same discrete `L` that STEP 2
@@ -20,8 +20,20 @@
 //!   which as a flow would push away). `C` has λ-weighted identity rows below it (`A = [C; √λ S]`,
 //!   `b = [M δ̃; √λ X₀]`): `S` is a `|X₀| × |X|` row selection, the unknown is `X` alone.
 //! * **Scale.** STEP 2 fits `C X ≈ M δ̃` (the `L` rows multiplied by the vertex areas), so both terms are
-//!   squared lengths and λ means the same at any size or resolution; STEP 1's time step is `τ h̄²`, so
-//!   τ ∈ [0.1, 1] is in units of the grid, as the thesis intends ("τ of the order of the grid size").
+//!   squared lengths and λ means the same at any size or resolution. τ is in units of the grid, as the
+//!   thesis intends ("τ of the order of the grid size"), the grid being the curve network's
+//!   ([`DiffusionOptions::grid`], ℓ = its mean edge length): STEP 1 diffuses for a time `τ ℓ²` per outer
+//!   iteration, in `inner_steps` backward-Euler sub-steps of `τ ℓ² / inner_steps`. At τ = 0.5 the
+//!   curvature's diffusion length per outer iteration, `√(2τ) ℓ`, is one network edge: each iteration
+//!   spreads it across a face, at any tessellation depth. The split scheme's fixed point depends on this
+//!   time (weak diffusion tends to `Δ³X = 0`, strong diffusion to a biharmonic surface pressed by the
+//!   mean curvature of the whole region). Measured on the webcam demo's networks from the true strokes,
+//!   seeds 1–10, % of the drawn region's diagonal: with the sub-step `τ h̄²` of the tessellation's mean
+//!   edge h̄ (ℓ ≈ 8 h̄ after three levels, so 10× less diffusion) 0.036/0.031/0.194/0.051/0.158/0.042/
+//!   0.021/0.022/0.054/0.041, worse than a thin-plate spline through the same curves on seeds 3 and 9
+//!   (0.135, 0.041); with `τ ℓ²` 0.026/0.023/0.121/0.023/0.077/0.030/0.020/0.016/0.033/0.033, better than
+//!   it on every seed; the optimum is flat (4–16 × 0.1 ℓ² per sub-step within 0.005 on seed 3), and 100×
+//!   more diffusion is worse again (0.159 on seed 3: the whole region's mean curvature presses every face).
 //! * **Symmetry.** The weights `W_ij = exp(−|S_i − S_j|/σ²)` (S = number of sharp edges at a vertex) are
 //!   used unnormalised: the thesis's `1/Z(i)` makes `W` non-symmetric, and its own SPD rewriting needs a
 //!   symmetric matrix. With σ = 0.2, crease, corner and smooth vertices are decoupled (`e⁻²⁵`). Negative
@@ -75,8 +87,13 @@ pub struct DiffusionOptions {
     pub lambda: f64,
     /// Sharpness kernel width σ (default 0.2).
     pub sigma: f64,
-    /// STEP 1 time step τ in units of the squared mean edge length (default 0.5).
+    /// STEP 1 diffusion time τ per outer iteration, in units of the squared grid length ℓ² (default
+    /// 0.5: the curvature spreads by one grid length per iteration).
     pub tau: f64,
+    /// The grid length ℓ (module docs "Scale"): the curve network's mean edge length, which
+    /// [`super::v2::v2_refined`] sets from the base mesh; `None` takes the mesh's own mean edge length
+    /// (for a mesh that is itself the network's grid).
+    pub grid: Option<f64>,
     /// STEP 1 backward-Euler steps per outer iteration (default 5).
     pub inner_steps: usize,
     /// Outer iterations (default 10, the top of the thesis's "between 5 and 10": a face several
@@ -99,6 +116,7 @@ impl Default for DiffusionOptions {
             lambda: 1.0,
             sigma: 0.2,
             tau: 0.5,
+            grid: None,
             inner_steps: 5,
             outer_iterations: 10,
             hard: false,
@@ -125,7 +143,7 @@ pub struct SurfaceDiffusion {
     x0: Vec<Vec3>,
     constrained: Vec<usize>,
     sharp_count: Vec<f64>,
-    h2: f64,
+    dt: f64,
     ops: QuadCotan,
     asm: Assembly,
     cmat: SparseMatrix,
@@ -171,8 +189,18 @@ impl SurfaceDiffusion {
         }
         let ops = QuadCotan::new(m, &x0);
         let asm = Assembly::new(x0.len(), &ops.pairs).map_err(solve_err)?;
-        let h2 = mean_edge * mean_edge;
-        let (a1, a2, cmat) = matrices(opts, &asm, &ops, &sharp_count, &constrained, h2)?;
+        let grid = match opts.grid {
+            Some(l) if l > 0.0 && l.is_finite() => l,
+            Some(l) => {
+                return Err(SurfaceError::Degenerate(format!(
+                    "grid length {l} is not a positive length"
+                )))
+            }
+            None => mean_edge,
+        };
+        // STEP 1's sub-step: τℓ² per outer iteration over `inner_steps` backward-Euler steps.
+        let dt = opts.tau * grid * grid / opts.inner_steps.max(1) as f64;
+        let (a1, a2, cmat) = matrices(opts, &asm, &ops, &sharp_count, &constrained, dt)?;
         let step1 =
             CholeskySolver::new(a1.as_ref(), CholeskyOptions::default()).map_err(solve_err)?;
         let step2 = if opts.hard {
@@ -192,7 +220,7 @@ impl SurfaceDiffusion {
             x0,
             constrained,
             sharp_count,
-            h2,
+            dt,
             ops,
             asm,
             cmat,
@@ -222,7 +250,7 @@ impl SurfaceDiffusion {
                     &self.ops,
                     &self.sharp_count,
                     &self.constrained,
-                    self.h2,
+                    self.dt,
                 )?;
                 self.step1.factorize(a1.as_ref()).map_err(solve_err)?;
                 match &mut self.step2 {
@@ -317,21 +345,20 @@ impl SurfaceDiffusion {
     }
 }
 
-/// `(STEP 1 matrix M + τh̄²K_w, STEP 2 normal matrix, C)` at the current operators.
+/// `(STEP 1 matrix M + Δt K_w, STEP 2 normal matrix, C)` at the current operators.
 fn matrices(
     opts: &DiffusionOptions,
     asm: &Assembly,
     ops: &QuadCotan,
     sharp_count: &[f64],
     constrained: &[usize],
-    h2: f64,
+    dt: f64,
 ) -> Result<(SparseMatrix, SparseMatrix, SparseMatrix), SurfaceError> {
     let n = ops.area.len();
     let s2 = (opts.sigma * opts.sigma).max(1e-300);
     let s = sharp_count;
     let w = |i: usize, j: usize| (-(s[i] - s[j]).abs() / s2).exp();
-    let dt = opts.tau * h2;
-    // M − τh̄² C_w (C_w clamped: an M-matrix).
+    // M − Δt C_w (C_w clamped: an M-matrix).
     let a1 = asm.build(&ops.pairs, w, true, -dt, &ops.area);
     let c = asm.build(&ops.pairs, |_, _| 1.0, false, 1.0, &vec![0.0; n]);
     // CᵀC = C² (C is symmetric) + λ on the constrained diagonal.

@@ -52,4 +52,6 @@ pub use triquad::{triquadrify, TriquadOptions};
 pub use v1::{
     reconstruct_v1, refined_v1, subdivide_v1, subdivide_v1_control, without_generated, V1Options,
 };
-pub use v2::{reconstruct_v2, reconstruct_v2_from_base, subdivide, v2_refined, V2Options};
+pub use v2::{
+    diffusion_options, reconstruct_v2, reconstruct_v2_from_base, subdivide, v2_refined, V2Options,
+};

@@ -87,7 +87,18 @@ pub fn reconstruct_v2_from_base(
 /// The Refined Mesh of V2: tessellation and flow, before the final subdivision.
 pub fn v2_refined(base: &ControlMesh, opts: &V2Options) -> Result<ControlMesh, SurfaceError> {
     let t = tessellate(base, &opts.tessellate)?;
-    surface_diffusion(&t, &opts.diffusion)
+    surface_diffusion(&t, &diffusion_options(base, opts))
+}
+
+/// The flow's options with its grid length set to the base mesh's mean edge length (the network's grid;
+/// [`DiffusionOptions::grid`]) unless `opts` gives one.
+pub fn diffusion_options(base: &ControlMesh, opts: &V2Options) -> DiffusionOptions {
+    let m = &base.mesh;
+    let mean_edge = m.edges().map(|e| m.edge_length(e)).sum::<f64>() / m.n_edges().max(1) as f64;
+    DiffusionOptions {
+        grid: opts.diffusion.grid.or(Some(mean_edge).filter(|l| *l > 0.0)),
+        ..opts.diffusion
+    }
 }
 
 /// `levels` Catmull-Clark steps; with [`CurveKeeping::Limit`] the result is moved to its limit positions
