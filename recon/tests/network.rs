@@ -9,7 +9,11 @@ use fires_recon::network::tools::{
     ToolError,
 };
 use fires_recon::network::{Network, NetworkFile, NetworkFileError};
-use std::f64::consts::PI;
+use std::f64::consts::{PI, TAU};
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
 
 fn disc() -> Network {
     let mut net = Network::new();
@@ -57,6 +61,43 @@ fn boundary_is_one_face_of_two_edges_split_at_the_diameter() {
     .unwrap_err();
     assert!(matches!(e, ToolError::NotClosed { gap_mm, .. } if (gap_mm - 200.0).abs() < 1e-6));
     assert_eq!(net, Network::new());
+}
+
+#[test]
+fn a_loop_whose_start_was_not_tracked_closes_across_the_untracked_length() {
+    // A 50 mm circle missing its first 0.3 rad (15 mm of arc, a 14.99 mm chord): over the 10 mm limit as
+    // drawn, a boundary once the pen is known to have drawn 16 mm unseen before the first point.
+    let pts: Vec<[f64; 3]> = (0..=200)
+        .map(|i| 0.3 + (TAU - 0.3) * i as f64 / 200.0)
+        .map(|a| [0.05 * a.cos(), 0.05 * a.sin(), Z])
+        .collect();
+    let mut net = Network::new();
+    let e =
+        insert_boundary(&mut net, CurveInput::new(&pts), &BoundaryOptions::default()).unwrap_err();
+    assert!(
+        matches!(e, ToolError::NotClosed { gap_mm, limit_mm } if (gap_mm - 14.97).abs() < 0.05 && limit_mm == 10.0),
+        "{e:?}"
+    );
+    assert_eq!(net, Network::new());
+    let curve = CurveInput {
+        untracked_mm: [16.0, 0.0],
+        ..CurveInput::new(&pts)
+    };
+    let (r, _) = insert_boundary(&mut net, curve, &BoundaryOptions::default()).unwrap();
+    let t = net.topology();
+    assert_eq!((t.vertices, t.edges, t.faces, t.boundaries), (2, 2, 1, 1));
+    // The loop is the drawn points closed by the chord across the gap.
+    let face = net.face_points(r.face);
+    let len: f64 = face
+        .iter()
+        .zip(face.iter().cycle().skip(1))
+        .map(|(a, b)| dist(*a, *b))
+        .sum();
+    let drawn: f64 = pts.windows(2).map(|w| dist(w[0], w[1])).sum();
+    assert!(
+        (len - drawn - dist(pts[0], pts[200])).abs() < 1e-9,
+        "{len} {drawn}"
+    );
 }
 
 #[test]

@@ -87,22 +87,26 @@ pub fn stroke_record(
                 .sum::<f64>()
         })
         .sum();
-    let closed = match (polyline.first(), polyline.last()) {
-        (Some(a), Some(b)) => {
-            dist(a, b) <= config.close_distance_m
-                && length >= config.min_closed_length * config.close_distance_m
-        }
-        _ => false,
-    };
-    fires_record::Stroke {
+    let mut record = fires_record::Stroke {
         id,
         t_start_ns: stroke.t_start_ns,
         t_end_ns: stroke.t_end_ns,
         buttons,
-        closed,
+        closed: false,
         raw_points: stroke.points.len(),
         pieces,
-    }
+    };
+    // The ends may be apart by what the pen drew unseen at either end (the button was down, the
+    // tracker had no tip): a loop whose start was lost still closes.
+    let [u0, u1] = record.untracked_mm();
+    record.closed = match (polyline.first(), polyline.last()) {
+        (Some(a), Some(b)) => {
+            dist(a, b) <= config.close_distance_m + (u0 + u1) * 1e-3
+                && length >= config.min_closed_length * config.close_distance_m
+        }
+        _ => false,
+    };
+    record
 }
 
 /// One piece: the post-processed polyline of raw samples tracked without a gap.
@@ -239,6 +243,23 @@ mod tests {
         let mut dab = line_stroke(50, false);
         dab.points.iter_mut().for_each(|p| p.p[0] *= 0.02);
         assert!(!stroke_record(0, 1, &dab, &cfg).closed);
+    }
+
+    #[test]
+    fn a_loop_whose_start_was_not_tracked_is_still_closed() {
+        // The 50 mm loop is drawn in 2 s (157 mm/s); the tracker missed its first 0.1 s, so its ends
+        // are a 15.7 mm chord apart, over the 10 mm closing distance.
+        let cfg = StrokeRecordConfig::default();
+        let mut late = line_stroke(400, true);
+        late.points.retain(|p| p.t_ns >= 1_100_000_000);
+        let r = stroke_record(0, 1, &late, &cfg);
+        let [u0, u1] = r.untracked_mm();
+        assert!((u0 - 15.7).abs() < 0.5 && u1 == 0.0, "{u0} {u1}");
+        assert!(r.closed);
+        // The same points with the button pressed at the first of them: nothing was drawn unseen, and
+        // a 15.7 mm gap is an open curve.
+        late.t_start_ns = late.points[0].t_ns;
+        assert!(!stroke_record(0, 1, &late, &cfg).closed);
     }
 
     #[test]

@@ -15,7 +15,8 @@ use crate::network::{EdgeId, FaceId, Transaction, VertexId};
 #[derive(Clone, Debug)]
 pub struct BoundaryOptions {
     /// Largest distance between the first and last point of a closed curve, mm (the strokes file's
-    /// closing distance).
+    /// closing distance), widened by the curve's [`CurveInput::untracked_mm`] (the pen drew that far
+    /// unseen; a straight chord closes the loop across the gap).
     pub close_mm: f64,
 }
 
@@ -49,10 +50,12 @@ pub fn insert_boundary(
         ));
     }
     let gap = dist(pts[0], pts[pts.len() - 1]);
-    if gap > options.close_mm * 1e-3 {
+    // What the pen drew unseen at either end widens the limit: the loop closes across it with a chord.
+    let limit_mm = options.close_mm + curve.untracked_mm.iter().map(|u| u.max(0.0)).sum::<f64>();
+    if gap > limit_mm * 1e-3 {
         return Err(ToolError::NotClosed {
             gap_mm: gap * 1e3,
-            limit_mm: options.close_mm,
+            limit_mm,
         });
     }
     if gap <= SAME_POINT_M {
