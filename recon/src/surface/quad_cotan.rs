@@ -2,6 +2,7 @@
 //! along both of its diagonals and the two triangulations are averaged (weight ½ each), so the operator
 //! does not depend on which diagonal an arbitrary triangulation would pick (FIRES thesis §6.4: "a local
 //! triangulation built around each vertex"; the thesis does not say which, this is the symmetric choice).
+//! Where one split has a degenerate triangle (three nearly collinear corners) only the other is used.
 //! Triangles are used as they are; larger polygons are fanned around their first vertex.
 //!
 //! Conventions (as in [`crate::operators`]): `C_ij = ½(cot α + cot β)` summed over the triangles sharing
@@ -49,10 +50,11 @@ impl QuadCotan {
                 3 => tri(vs[0], vs[1], vs[2], 1.0),
                 4 => {
                     let [a, b, c, d] = [vs[0], vs[1], vs[2], vs[3]];
-                    tri(a, b, c, 0.5);
-                    tri(a, c, d, 0.5);
-                    tri(a, b, d, 0.5);
-                    tri(b, c, d, 0.5);
+                    let (wa, wb) = split_weights(x, [a, b, c, d]);
+                    tri(a, b, c, wa);
+                    tri(a, c, d, wa);
+                    tri(a, b, d, wb);
+                    tri(b, c, d, wb);
                 }
                 n => {
                     for k in 1..n - 1 {
@@ -81,6 +83,38 @@ impl QuadCotan {
             t.extend([(i, j, v), (j, i, v), (i, i, -v), (j, j, -v)]);
         }
         t
+    }
+}
+
+/// Largest cotangent magnitude of a sound triangle corner (an angle of 0.057° or 179.943°); past it the
+/// triangle is degenerate for the operator (its weights reach 10⁸ at the clamp of
+/// [`cot_of_angle_between`] and make the diffusion systems singular in practice).
+const MAX_SOUND_COT: f64 = 1e3;
+
+/// The weights of a quad's two diagonal splits, `(a c, b d)`: ½ each, or 1 for the only split whose
+/// triangles are sound. A quad with three (nearly) collinear corners, which the tessellation makes where a
+/// curve continues straight through a network vertex, has one split with a zero-area triangle; that split
+/// alone would give weights of 10⁷ (webcam seed 18's tracked network: the flow diverged, a vertex moved
+/// 321 m), while the other split describes the quad exactly.
+fn split_weights(x: &[Vec3], [a, b, c, d]: [usize; 4]) -> (f64, f64) {
+    let worst = |t: [[usize; 3]; 2]| {
+        t.iter()
+            .flat_map(|&[p, q, r]| {
+                let (pp, pq, pr) = (x[p], x[q], x[r]);
+                [
+                    cot_of_angle_between(pq - pp, pr - pp),
+                    cot_of_angle_between(pr - pq, pp - pq),
+                    cot_of_angle_between(pp - pr, pq - pr),
+                ]
+            })
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+    };
+    let sound_a = worst([[a, b, c], [a, c, d]]) <= MAX_SOUND_COT;
+    let sound_b = worst([[a, b, d], [b, c, d]]) <= MAX_SOUND_COT;
+    match (sound_a, sound_b) {
+        (true, false) => (1.0, 0.0),
+        (false, true) => (0.0, 1.0),
+        _ => (0.5, 0.5),
     }
 }
 
