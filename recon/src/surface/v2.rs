@@ -22,10 +22,11 @@ use crate::network::Network;
 pub struct V2Options {
     /// The basic refinement (default 3 levels: 16n quads per n-gon).
     pub tessellate: TessellateOptions,
-    /// The surface-diffusion flow: the thesis's defaults (λ = 1, σ = 0.2, τ = 0.5, 5 × 5 steps) but with hard
+    /// The surface-diffusion flow: the thesis's defaults (λ = 1, σ = 0.2, τ = 0.5 in the network's grid
+    /// units, 10 outer iterations of 5 inner steps; [`diffusion_options`] sets the grid) but with hard
     /// curve constraints, the digest's recommendation for a surface that interpolates the network (soft
-    /// λ = 1 lets the curve vertices drift: on a bumpy 5 × 5 grid 0.62 mm Hausdorff error and 0.79° across
-    /// the curves, against 0.45 mm and 0.13° with hard constraints).
+    /// λ = 1 lets the curve vertices drift: when this was chosen, on a bumpy 5 × 5 grid 0.62 mm
+    /// Hausdorff error and 0.79° across the curves, against 0.45 mm and 0.13° with hard constraints).
     pub diffusion: DiffusionOptions,
     /// The final subdivision's rules and curve keeping (default [`CurveKeeping::Limit`]: tangent-continuous
     /// across the smooth curves, and through them after the final limit projection).
