@@ -253,6 +253,21 @@ fn disc_network(lift: impl Fn(f64, f64) -> f64) -> fires_recon::network::Network
     lifted_network(strokes, lift)
 }
 
+/// RMS and largest distance of the surface's vertices from the lifted plane `z = Z + lift(x, y)`,
+/// measured along z.
+fn height_errors(c: &ControlMesh, lift: impl Fn(f64, f64) -> f64) -> (f64, f64) {
+    let err: Vec<f64> = c
+        .mesh
+        .vertices()
+        .map(|v| {
+            let p = c.mesh.position(v);
+            p.z - Z - lift(p.x, p.y)
+        })
+        .collect();
+    let rms = (err.iter().map(|e| e * e).sum::<f64>() / err.len() as f64).sqrt();
+    (rms, err.iter().fold(0.0f64, |a, e| a.max(e.abs())))
+}
+
 /// The network of `strokes` (the first is the closed boundary), every point lifted by `lift(x, y)`.
 fn lifted_network(
     strokes: Vec<Vec<[f64; 3]>>,
@@ -303,16 +318,7 @@ fn a_curved_network_from_strokes_is_smooth_across_its_curves_and_keeps_them() {
     let lift = move |x: f64, y: f64| k * (x * x + y * y);
     let net = disc_network(lift);
     let c = reconstruct_v2(&net, &V2Options::default()).unwrap();
-    let err: Vec<f64> = c
-        .mesh
-        .vertices()
-        .map(|v| {
-            let p = c.mesh.position(v);
-            p.z - Z - lift(p.x, p.y)
-        })
-        .collect();
-    let rms = (err.iter().map(|e| e * e).sum::<f64>() / err.len() as f64).sqrt();
-    let max = err.iter().fold(0.0f64, |a, e| a.max(e.abs()));
+    let (rms, max) = height_errors(&c, lift);
     let (jump, nj) = normal_jump_deg(&c, false);
     let (cd, cd_rms) = curve_distance(&c);
     let diag = (4.0 * R * R + 4.0 * B * B + (k * R * R).powi(2)).sqrt();
@@ -378,16 +384,7 @@ fn the_open_boundary_does_not_bend_the_faces_along_it() {
     let lift = move |x: f64, y: f64| rs - (rs * rs - x * x - y * y).sqrt();
     let net = disc_network(lift);
     let c = reconstruct_v2(&net, &V2Options::default()).unwrap();
-    let err: Vec<f64> = c
-        .mesh
-        .vertices()
-        .map(|v| {
-            let p = c.mesh.position(v);
-            p.z - Z - lift(p.x, p.y)
-        })
-        .collect();
-    let rms = (err.iter().map(|e| e * e).sum::<f64>() / err.len() as f64).sqrt();
-    let max = err.iter().fold(0.0f64, |a, e| a.max(e.abs()));
+    let (rms, max) = height_errors(&c, lift);
     eprintln!(
         "sphere cap: height error rms {:.4} mm, max {:.4} mm",
         rms * 1e3,

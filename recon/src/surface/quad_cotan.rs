@@ -31,13 +31,13 @@ impl QuadCotan {
     pub fn new(mesh: &SurfaceMesh, x: &[Vec3]) -> Self {
         let mut pairs = Vec::with_capacity(mesh.n_faces() * 12);
         let mut area = vec![0.0; mesh.vertices_size()];
-        let mut tri = |a: usize, b: usize, c: usize, w: f64| {
-            let (pa, pb, pc) = (x[a], x[b], x[c]);
-            let ca = 0.5 * cot_of_angle_between(pb - pa, pc - pa);
-            let cb = 0.5 * cot_of_angle_between(pc - pb, pa - pb);
-            let cc = 0.5 * cot_of_angle_between(pa - pc, pb - pc);
-            pairs.extend([(b, c, w * ca), (c, a, w * cb), (a, b, w * cc)]);
-            let t = w * triangle_area(pa, pb, pc) / 3.0;
+        let mut add = |[a, b, c]: [usize; 3], [ca, cb, cc]: [f64; 3], w: f64| {
+            pairs.extend([
+                (b, c, 0.5 * w * ca),
+                (c, a, 0.5 * w * cb),
+                (a, b, 0.5 * w * cc),
+            ]);
+            let t = w * triangle_area(x[a], x[b], x[c]) / 3.0;
             area[a] += t;
             area[b] += t;
             area[c] += t;
@@ -47,18 +47,26 @@ impl QuadCotan {
             vs.clear();
             vs.extend(mesh.face_vertices(f).map(|v| v.idx()));
             match vs.len() {
-                3 => tri(vs[0], vs[1], vs[2], 1.0),
+                3 => {
+                    let t = [vs[0], vs[1], vs[2]];
+                    add(t, corner_cots(x, t), 1.0);
+                }
                 4 => {
                     let [a, b, c, d] = [vs[0], vs[1], vs[2], vs[3]];
-                    let (wa, wb) = split_weights(x, [a, b, c, d]);
-                    tri(a, b, c, wa);
-                    tri(a, c, d, wa);
-                    tri(a, b, d, wb);
-                    tri(b, c, d, wb);
+                    // The two diagonal splits, `a c` and `b d`.
+                    let split = [[[a, b, c], [a, c, d]], [[a, b, d], [b, c, d]]];
+                    let cots = split.map(|s| s.map(|t| corner_cots(x, t)));
+                    let w = split_weights(&cots);
+                    for ((s, c), w) in split.into_iter().zip(cots).zip(w) {
+                        for (t, ct) in s.into_iter().zip(c) {
+                            add(t, ct, w);
+                        }
+                    }
                 }
                 n => {
                     for k in 1..n - 1 {
-                        tri(vs[0], vs[k], vs[k + 1], 1.0);
+                        let t = [vs[0], vs[k], vs[k + 1]];
+                        add(t, corner_cots(x, t), 1.0);
                     }
                 }
             }
@@ -91,30 +99,27 @@ impl QuadCotan {
 /// [`cot_of_angle_between`] and make the diffusion systems singular in practice).
 const MAX_SOUND_COT: f64 = 1e3;
 
-/// The weights of a quad's two diagonal splits, `(a c, b d)`: ½ each, or 1 for the only split whose
-/// triangles are sound. A quad with three (nearly) collinear corners, which the tessellation makes where a
+/// The cotangents of triangle `t`'s corners, in its vertex order.
+fn corner_cots(x: &[Vec3], [a, b, c]: [usize; 3]) -> [f64; 3] {
+    let (pa, pb, pc) = (x[a], x[b], x[c]);
+    [
+        cot_of_angle_between(pb - pa, pc - pa),
+        cot_of_angle_between(pc - pb, pa - pb),
+        cot_of_angle_between(pa - pc, pb - pc),
+    ]
+}
+
+/// The weights of a quad's two diagonal splits from their triangles' corner cotangents: ½ each, or 1
+/// for the only split whose triangles are sound. A quad with three (nearly) collinear corners, which the tessellation makes where a
 /// curve continues straight through a network vertex, has one split with a zero-area triangle; that split
 /// alone would give weights of 10⁷ (webcam seed 18's tracked network: the flow diverged, a vertex moved
 /// 321 m), while the other split describes the quad exactly.
-fn split_weights(x: &[Vec3], [a, b, c, d]: [usize; 4]) -> (f64, f64) {
-    let worst = |t: [[usize; 3]; 2]| {
-        t.iter()
-            .flat_map(|&[p, q, r]| {
-                let (pp, pq, pr) = (x[p], x[q], x[r]);
-                [
-                    cot_of_angle_between(pq - pp, pr - pp),
-                    cot_of_angle_between(pr - pq, pp - pq),
-                    cot_of_angle_between(pp - pr, pq - pr),
-                ]
-            })
-            .fold(0.0f64, |m, v| m.max(v.abs()))
-    };
-    let sound_a = worst([[a, b, c], [a, c, d]]) <= MAX_SOUND_COT;
-    let sound_b = worst([[a, b, d], [b, c, d]]) <= MAX_SOUND_COT;
-    match (sound_a, sound_b) {
-        (true, false) => (1.0, 0.0),
-        (false, true) => (0.0, 1.0),
-        _ => (0.5, 0.5),
+fn split_weights(cots: &[[[f64; 3]; 2]; 2]) -> [f64; 2] {
+    let sound = |split: &[[f64; 3]; 2]| split.iter().flatten().all(|c| c.abs() <= MAX_SOUND_COT);
+    match (sound(&cots[0]), sound(&cots[1])) {
+        (true, false) => [1.0, 0.0],
+        (false, true) => [0.0, 1.0],
+        _ => [0.5, 0.5],
     }
 }
 
