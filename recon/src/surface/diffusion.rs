@@ -34,6 +34,12 @@
 //!   (0.135, 0.041); with `τ ℓ²` 0.026/0.023/0.121/0.023/0.077/0.030/0.020/0.016/0.033/0.033, better than
 //!   it on every seed; the optimum is flat (4–16 × 0.1 ℓ² per sub-step within 0.005 on seed 3), and 100×
 //!   more diffusion is worse again (0.159 on seed 3: the whole region's mean curvature presses every face).
+//!   The price, on a network of few large faces: a 20 s session of 6 faces (seed 1) reads 0.358 with
+//!   `τ ℓ²`, against 0.138 / 0.187 / 0.247 with a fixed sub-step of 0.5 / 1 / 2 h̄² (all under the
+//!   spline's 0.454). Re-measured with the open boundary below, the fixed sub-steps of 0.5 / 1 / 2 h̄² give
+//!   0.282 / 0.161 / 0.102 on 60 s seed 11 (spline 0.212; `τ ℓ²`: 0.107), so at the thesis's τ = 0.5 only
+//!   the grid units keep every 60 s session (seeds 1–20) under the spline; a scale between the two, set
+//!   by the faces' own sizes, is left open.
 //! * **Symmetry.** The weights `W_ij = exp(−|S_i − S_j|/σ²)` (S = number of sharp edges at a vertex) are
 //!   used unnormalised: the thesis's `1/Z(i)` makes `W` non-symmetric, and its own SPD rewriting needs a
 //!   symmetric matrix. With σ = 0.2, crease, corner and smooth vertices are decoupled (`e⁻²⁵`). Negative
