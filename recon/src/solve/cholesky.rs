@@ -171,8 +171,17 @@ impl CholeskySolver {
             FillOrdering::NestedDissection => symbolic_with(true)?,
             FillOrdering::Auto if n < ND_MIN_DIM => symbolic_with(false)?,
             FillOrdering::Auto => {
-                // Both analyses; the smaller factor is the cheaper factorisation and solve.
-                let (amd, nd) = (symbolic_with(false)?, symbolic_with(true)?);
+                // Both analyses, concurrently (they are independent and neither wins on
+                // every mesh); the smaller factor is the cheaper factorisation and solve.
+                let (amd, nd) = std::thread::scope(|scope| {
+                    let nd = scope.spawn(|| symbolic_with(true));
+                    let amd = symbolic_with(false);
+                    let nd = nd
+                        .join()
+                        .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+                    (amd, nd)
+                });
+                let (amd, nd) = (amd?, nd?);
                 if nd.len_val() < amd.len_val() {
                     nd
                 } else {

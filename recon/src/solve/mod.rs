@@ -33,5 +33,6 @@ pub use fixed::FixedSolver;
 pub use least_squares::LeastSquaresSolver;
 pub use ordering::nested_dissection;
 pub use sparse::{
-    sparse_from_triplets, sparse_mul_dense, sparse_triplets, weighted_gram, SparseMatrix,
+    lower_product_sum, sparse_from_triplets, sparse_mul_dense, sparse_triplets, transpose,
+    weighted_gram, ProductTerm, SparseMatrix,
 };

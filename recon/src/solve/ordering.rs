@@ -58,7 +58,7 @@ impl Graph {
 /// `k`-th (faer's and AMD's convention for the forward array).
 pub fn nested_dissection(a: SymbolicSparseColMatRef<'_, usize>) -> Result<Vec<usize>, SolveError> {
     let n = a.ncols();
-    let (full, members) = compress(&symmetric_pattern(a));
+    let (full, members) = compress(symmetric_pattern(a));
     let mut d = Dissector {
         g: &full,
         stamp: vec![0; full.len()],
@@ -147,7 +147,7 @@ fn indistinguishable(g: &Graph, u: usize, v: usize) -> bool {
 }
 
 /// Merges indistinguishable nodes (equal closed neighbourhoods) into one weighted node.
-fn compress(g: &Graph) -> (Graph, Vec<Vec<usize>>) {
+fn compress(g: Graph) -> (Graph, Vec<Vec<usize>>) {
     let n = g.len();
     // A hash of the closed neighbourhood picks the candidates compared exactly.
     let key = |v: usize| {
@@ -164,7 +164,7 @@ fn compress(g: &Graph) -> (Graph, Vec<Vec<usize>>) {
         let found = list
             .iter()
             .copied()
-            .find(|&c| indistinguishable(g, members[c][0], v));
+            .find(|&c| indistinguishable(&g, members[c][0], v));
         let id = match found {
             Some(c) => c,
             None => {
@@ -177,6 +177,10 @@ fn compress(g: &Graph) -> (Graph, Vec<Vec<usize>>) {
         *slot = id;
     }
     let m = members.len();
+    if m == n {
+        // Nothing merged: the graph is its own quotient.
+        return (g, members);
+    }
     let mut xadj = Vec::with_capacity(m + 1);
     let mut flat = Vec::new();
     xadj.push(0);
@@ -371,23 +375,23 @@ impl Dissector<'_> {
             return Ok(());
         }
         let s = self.mark(nodes);
-        let mut local = HashMap::with_capacity(m);
+        // `level` is free here: it holds each node's index within the leaf.
         for (i, &v) in nodes.iter().enumerate() {
-            local.insert(v, i);
+            self.level[v] = i;
         }
         let mut col_ptr = Vec::with_capacity(m + 1);
         let mut row_idx = Vec::new();
         col_ptr.push(0);
         for &v in nodes {
-            let mut rows: Vec<usize> = self
-                .g
-                .neighbors(v)
-                .iter()
-                .filter(|&&u| self.stamp[u] == s)
-                .filter_map(|u| local.get(u).copied())
-                .collect();
-            rows.sort_unstable();
-            row_idx.extend_from_slice(&rows);
+            let start = row_idx.len();
+            row_idx.extend(
+                self.g
+                    .neighbors(v)
+                    .iter()
+                    .filter(|&&u| self.stamp[u] == s)
+                    .map(|&u| self.level[u]),
+            );
+            row_idx[start..].sort_unstable();
             col_ptr.push(row_idx.len());
         }
         let nnz = row_idx.len();
