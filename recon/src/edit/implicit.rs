@@ -26,16 +26,16 @@
 //! is singular (`x ↦ x + m (n·x − d)` costs nothing); this is reported as an error.
 
 use faer::Mat;
-use nalgebra::{DMatrix, Matrix3};
+use nalgebra::Matrix3;
 
-use super::local::{cotan_stiffness, cotan_weights, from_mat, gather};
+use super::local::{cotan_stiffness, cotan_weights_at, from_mat, gather};
 use super::problem::{EditProblem, Role};
 use super::session::EditMethod;
 use super::similarity::{mat_vec, polar_rotation, to_na, Mat3, Similarity};
 use super::system::{FactoredQuadratic, QuadTerm, RowBuilder};
 use super::EditError;
 use crate::geometry::{triangle_normal, Vec3};
-use crate::solve::{sparse_from_triplets, sparse_mul_dense, CholeskyOptions, FixedSolver};
+use crate::solve::{sparse_mul_dense, CholeskyOptions, FixedSolver};
 
 /// Condition number of `VᵢVᵢᵀ` above which a vertex is degenerate (Fu §2.4.3).
 pub const DEGENERATE_COND: f64 = 2e5;
@@ -69,6 +69,10 @@ impl Default for ImplicitOptions {
 pub struct ImplicitEditor {
     first: FactoredQuadratic,
     second: FixedSolver,
+    /// Time to build and factor the first system (Eq. 2.8), everything included, ms.
+    first_ms: f64,
+    /// Time to build and factor the second system (Eq. 2.10), ms.
+    second_ms: f64,
     /// Positions after the degenerate-vertex displacement.
     displaced: Vec<Vec3>,
     /// Stencil (vertex then 1-ring) and `Qᵢ` ((k+1) × 3, row-major) per ROI vertex.
@@ -87,6 +91,27 @@ pub struct ImplicitEditor {
     last_first: Option<Vec<Vec3>>,
 }
 
+/// The smallest and largest eigenvalue of a symmetric 3×3 matrix, in closed form (the
+/// trigonometric solution of the characteristic cubic; O. K. Smith, *Eigenvalues of a
+/// symmetric 3 × 3 matrix*, CACM 1961). Absolute error about ε·‖A‖, so a condition
+/// number up to [`DEGENERATE_COND`] is read to about 1e-10 relative.
+fn eigen_extremes(a: &Matrix3<f64>) -> (f64, f64) {
+    let off = a[(0, 1)].powi(2) + a[(0, 2)].powi(2) + a[(1, 2)].powi(2);
+    let q = (a[(0, 0)] + a[(1, 1)] + a[(2, 2)]) / 3.0;
+    let d = [a[(0, 0)] - q, a[(1, 1)] - q, a[(2, 2)] - q];
+    let p2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + 2.0 * off;
+    if p2 <= 0.0 || !p2.is_finite() {
+        return (q, q);
+    }
+    let p = (p2 / 6.0).sqrt();
+    let b = (a - Matrix3::identity() * q) / p;
+    let r = (b.determinant() / 2.0).clamp(-1.0, 1.0);
+    let phi = r.acos() / 3.0;
+    let hi = q + 2.0 * p * phi.cos();
+    let lo = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+    (lo, hi)
+}
+
 /// `cond(V Vᵀ)` and `Qᵢ` of vertex `i` for positions `x`.
 fn fit(x: &[Vec3], stencil: &[usize]) -> (f64, Option<Vec<[f64; 3]>>) {
     let k = stencil.len() - 1;
@@ -94,28 +119,19 @@ fn fit(x: &[Vec3], stencil: &[usize]) -> (f64, Option<Vec<[f64; 3]>>) {
         return (f64::INFINITY, None);
     }
     let c0 = stencil[1..].iter().fold(Vec3::ZERO, |a, &j| a + x[j]) / k as f64;
-    let mut v = DMatrix::<f64>::zeros(3, k + 1);
-    for (m, &s) in stencil.iter().enumerate() {
-        let d = x[s] - c0;
-        for r in 0..3 {
-            v[(r, m)] = d[r];
-        }
-    }
-    let vvt: Matrix3<f64> = {
-        let p = &v * v.transpose();
-        Matrix3::from_fn(|r, c| p[(r, c)])
-    };
-    let eig = vvt.symmetric_eigenvalues();
-    let (lo, hi) = (eig.min(), eig.max());
+    // V's columns: the stencil about the ring's centroid.
+    let v: Vec<nalgebra::Vector3<f64>> = stencil.iter().map(|&s| to_na(x[s] - c0)).collect();
+    let vvt: Matrix3<f64> = v.iter().map(|d| d * d.transpose()).sum();
+    let (lo, hi) = eigen_extremes(&vvt);
     let cond = if lo > 0.0 { hi / lo } else { f64::INFINITY };
     let Some(inv) = vvt.try_inverse() else {
         return (cond, None);
     };
     // P = Vᵀ (V Vᵀ)⁻¹, Q = P − a (1ᵀ P) with a = (0, 1/k, …, 1/k).
-    let p: Vec<[f64; 3]> = (0..=k)
-        .map(|m| {
-            let col = Matrix3::from_fn(|r, _| v[(r, m)]).column(0).into_owned();
-            let row = inv * col;
+    let p: Vec<[f64; 3]> = v
+        .iter()
+        .map(|d| {
+            let row = inv * d;
             [row[0], row[1], row[2]]
         })
         .collect();
@@ -138,6 +154,87 @@ fn fit(x: &[Vec3], stencil: &[usize]) -> (f64, Option<Vec<[f64; 3]>>) {
         })
         .collect();
     (cond, Some(q))
+}
+
+/// `Qmᵀ (L ⊗ I₃)` (its column `3i + c` is row `3i + c` of `(L ⊗ I₃) Qm`), with `L` the graph Laplacian of the 2-ring pairs: row
+/// `3i + c` is `Σ_k (Qᵢ[:, c] − Q_k[:, c])` over the ROI vertices `k` within two rings of
+/// `i`, each `Qᵢ` spread over its stencil (zero where the gradient is fixed). Summed in one
+/// dense accumulator per vertex, which is what makes the coherence term cheap to assemble.
+fn coherence_rows(
+    problem: &EditProblem,
+    stencil: &[Vec<usize>],
+    q: &[Vec<[f64; 3]>],
+    fixed_grad: impl Fn(usize) -> bool,
+) -> Result<crate::solve::SparseMatrix, EditError> {
+    let n_roi = problem.n_roi;
+    let n = problem.len();
+    let mut mark = vec![usize::MAX; n_roi];
+    let mut partners: Vec<Vec<usize>> = vec![Vec::new(); n_roi];
+    for i in 0..n_roi {
+        mark[i] = i;
+        for &j in &problem.neighbors[i] {
+            for &k in std::iter::once(&j).chain(problem.neighbors[j].iter()) {
+                if k < n_roi && mark[k] != i {
+                    mark[k] = i;
+                    if k > i {
+                        partners[i].push(k);
+                        partners[k].push(i);
+                    }
+                }
+            }
+        }
+    }
+    // Each free gradient's stencil and Qᵢ rows side by side, in one array.
+    let mut ptr = Vec::with_capacity(n_roi + 1);
+    let mut flat: Vec<(usize, [f64; 3])> = Vec::new();
+    ptr.push(0);
+    for i in 0..n_roi {
+        if !fixed_grad(i) {
+            flat.extend(stencil[i].iter().copied().zip(q[i].iter().copied()));
+        }
+        ptr.push(flat.len());
+    }
+    let mut acc = vec![[0.0; 3]; n];
+    let mut seen = vec![usize::MAX; n];
+    let mut touched = Vec::new();
+    // Room for every row: a vertex's stencils overlap, so this bounds the entries.
+    let bound: usize = (0..n_roi)
+        .map(|i| {
+            let own = ptr[i + 1] - ptr[i];
+            own + partners[i]
+                .iter()
+                .map(|&k| ptr[k + 1] - ptr[k])
+                .sum::<usize>()
+        })
+        .sum();
+    let mut rows = RowBuilder::with_capacity(n, 3 * n_roi, 3 * bound.min(n * n_roi));
+    let mut entries = Vec::new();
+    for (i, partners_i) in partners.iter().enumerate() {
+        touched.clear();
+        let mut add = |k: usize, f: f64| {
+            for &(s, qk) in &flat[ptr[k]..ptr[k + 1]] {
+                if seen[s] != i {
+                    seen[s] = i;
+                    acc[s] = [0.0; 3];
+                    touched.push(s);
+                }
+                for (a, q) in acc[s].iter_mut().zip(qk) {
+                    *a += f * q;
+                }
+            }
+        };
+        add(i, partners_i.len() as f64);
+        for &k in partners_i {
+            add(k, -1.0);
+        }
+        touched.sort_unstable();
+        for c in [0, 1, 2] {
+            entries.clear();
+            entries.extend(touched.iter().map(|&s| (s, acc[s][c])));
+            rows.push(&entries)?;
+        }
+    }
+    Ok(rows.finish_transposed())
 }
 
 /// Area-weighted vertex normals of the local faces.
@@ -283,6 +380,7 @@ impl EditMethod for ImplicitEditor {
     type Options = ImplicitOptions;
 
     fn factor(problem: &EditProblem, options: &ImplicitOptions) -> Result<Self, EditError> {
+        let clock = std::time::Instant::now();
         check_singular(problem)?;
         let n = problem.len();
         let n_roi = problem.n_roi;
@@ -319,11 +417,7 @@ impl EditMethod for ImplicitEditor {
             q.push(qi.unwrap_or_else(|| vec![[0.0; 3]; s.len()]));
         }
         // Clamped cotangent weights of the displaced mesh, normalised per row.
-        let displaced_problem = EditProblem {
-            rest: x.clone(),
-            ..problem.clone()
-        };
-        let w = cotan_weights(&displaced_problem, true);
+        let w = cotan_weights_at(problem, &x, true);
         let mut wsum = vec![0.0; n];
         for &(i, _, v) in &w {
             wsum[i] += v;
@@ -373,46 +467,26 @@ impl EditMethod for ImplicitEditor {
                 qm.push(&entries)?;
             }
         }
-        // Coherence metric: graph Laplacian of the 2-ring pairs, times I₃.
-        let mut mark = vec![usize::MAX; n_roi];
-        let mut pairs = Vec::new();
-        for i in 0..n_roi {
-            mark[i] = i;
-            for &j in &problem.neighbors[i] {
-                for &k in std::iter::once(&j).chain(problem.neighbors[j].iter()) {
-                    if k < n_roi && mark[k] != i {
-                        mark[k] = i;
-                        if k > i {
-                            pairs.push((i, k));
-                        }
-                    }
-                }
-            }
-        }
-        let mut lt = Vec::with_capacity(pairs.len() * 12);
-        for &(i, j) in &pairs {
-            for c in 0..3 {
-                let (a, b) = (3 * i + c, 3 * j + c);
-                lt.extend([(a, a, 1.0), (b, b, 1.0), (a, b, -1.0), (b, a, -1.0)]);
-            }
-        }
-        let l3 = sparse_from_triplets(3 * n_roi, 3 * n_roi, &lt)?;
+        // Coherence: E_R = Σ_c Q_cᵀ L Q_c over the graph Laplacian L of the 2-ring pairs,
+        // given to the solver as W·Qm with W = L ⊗ I₃ (the rows of Qm are 3i + c).
+        let wqm = coherence_rows(problem, &stencil, &q, fixed_grad)?;
         let ebar = problem.mean_edge_length();
         let mu = options.coherence_weight * ebar * ebar;
-        let terms = [
+        let terms = vec![
             QuadTerm {
                 a: al.finish()?,
-                metric: None,
+                a_t_w: None,
                 weight: 1.0,
             },
             QuadTerm {
                 a: qm.finish()?,
-                metric: Some(l3),
+                a_t_w: Some(wqm),
                 weight: mu,
             },
         ];
         let x0 = Mat::from_fn(n, 3, |i, c| x[i][c]);
-        let first = FactoredQuadratic::new(n, &terms, &problem.constrained(), Some(x0))?;
+        let first = FactoredQuadratic::new(n, terms, &problem.constrained(), Some(x0))?;
+        let first_ms = clock.elapsed().as_secs_f64() * 1e3;
         let k = cotan_stiffness(problem)?;
         let kv = sparse_mul_dense(
             k.as_ref(),
@@ -423,9 +497,12 @@ impl EditMethod for ImplicitEditor {
             &problem.constrained(),
             CholeskyOptions::default(),
         )?;
+        let second_ms = clock.elapsed().as_secs_f64() * 1e3 - first_ms;
         Ok(Self {
             first,
             second,
+            first_ms,
+            second_ms,
             displaced: x,
             stencil,
             q,
@@ -455,11 +532,119 @@ impl EditMethod for ImplicitEditor {
     fn factor_len(&self) -> usize {
         self.first.factor_len()
     }
+
+    fn factor_parts(&self) -> Vec<(&'static str, f64)> {
+        let t = self.first.timings();
+        vec![
+            ("first_system", self.first_ms),
+            ("first_assemble", t.assemble_ms),
+            ("first_ordering", t.analyze_ms),
+            ("first_cholesky", t.numeric_ms),
+            ("first_shared_rhs", t.shared_ms),
+            ("second_system", self.second_ms),
+        ]
+    }
 }
 
 impl ImplicitEditor {
     /// The coherence weight `μ` in absolute units.
     pub fn coherence_mu(&self) -> f64 {
         self.mu
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::edit::run::bench_spec;
+    use crate::generate::icosphere;
+
+    #[test]
+    fn closed_form_eigenvalues_agree_with_the_iterative_ones() {
+        let mut seed = 1u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for case in 0..200 {
+            // V Vᵀ of a ring flattened towards a plane by up to 1e-4: cond up to ~1e8.
+            let flat = 10f64.powi(-(case % 5));
+            let mut m = Matrix3::zeros();
+            for _ in 0..6 {
+                let d = nalgebra::Vector3::new(rnd(), rnd(), rnd() * flat);
+                m += d * d.transpose();
+            }
+            let (lo, hi) = eigen_extremes(&m);
+            let e = m.symmetric_eigenvalues();
+            assert!((hi - e.max()).abs() <= 1e-12 * e.max(), "case {case}");
+            assert!((lo - e.min()).abs() <= 1e-12 * e.max(), "case {case}");
+            let (c, c_ref) = (hi / lo, e.max() / e.min());
+            assert!(
+                (c - c_ref).abs() <= 1e-6 * c_ref,
+                "case {case}: {c} vs {c_ref}"
+            );
+        }
+        let d = Matrix3::from_diagonal(&nalgebra::Vector3::new(3.0, 1.0, 2.0));
+        assert_eq!(eigen_extremes(&d), (1.0, 3.0));
+        assert_eq!(eigen_extremes(&(Matrix3::identity() * 2.0)), (2.0, 2.0));
+    }
+
+    #[test]
+    fn coherence_rows_are_the_pair_laplacian_times_the_gradient_rows() {
+        let mesh = icosphere(2, 1.0);
+        let spec = bench_spec(&mesh, 0.6).unwrap();
+        let p = EditProblem::new(&mesh, &spec).unwrap();
+        let (n, n_roi) = (p.len(), p.n_roi);
+        let stencil: Vec<Vec<usize>> = (0..n_roi)
+            .map(|i| {
+                std::iter::once(i)
+                    .chain(p.neighbors[i].iter().copied())
+                    .collect()
+            })
+            .collect();
+        let q: Vec<Vec<[f64; 3]>> = stencil.iter().map(|s| fit(&p.rest, s).1.unwrap()).collect();
+        for every in [usize::MAX, 5] {
+            // Some gradients fixed: their rows of Qm are zero.
+            let fixed = |i: usize| every != usize::MAX && i % every == 0;
+            let got = coherence_rows(&p, &stencil, &q, fixed).unwrap();
+            assert_eq!((got.nrows(), got.ncols()), (n, 3 * n_roi));
+            // Dense reference: L of the pairs within graph distance 2 (ROI only), times Qm.
+            let mut lap = vec![vec![0.0; n_roi]; n_roi];
+            for (i, row) in lap.iter_mut().enumerate() {
+                let mut near: Vec<usize> = Vec::new();
+                for &j in &p.neighbors[i] {
+                    near.push(j);
+                    near.extend(p.neighbors[j].iter().copied());
+                }
+                near.sort_unstable();
+                near.dedup();
+                for k in near.into_iter().filter(|&k| k < n_roi && k != i) {
+                    row[k] = -1.0;
+                    row[i] += 1.0;
+                }
+            }
+            let mut qm = vec![vec![0.0; n]; 3 * n_roi];
+            for i in (0..n_roi).filter(|&i| !fixed(i)) {
+                for (&s, row) in stencil[i].iter().zip(&q[i]) {
+                    for c in 0..3 {
+                        qm[3 * i + c][s] = row[c];
+                    }
+                }
+            }
+            let mut dense = vec![vec![0.0; 3 * n_roi]; n];
+            for (s, col, v) in crate::solve::sparse_triplets(got.as_ref()) {
+                dense[s][col] += v;
+            }
+            let mut worst = 0.0f64;
+            for i in 0..n_roi {
+                for c in 0..3 {
+                    for s in 0..n {
+                        let want: f64 = (0..n_roi).map(|k| lap[i][k] * qm[3 * k + c][s]).sum();
+                        worst = worst.max((dense[s][3 * i + c] - want).abs());
+                    }
+                }
+            }
+            assert!(worst < 1e-9, "largest difference {worst}");
+        }
     }
 }

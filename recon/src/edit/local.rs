@@ -9,7 +9,16 @@ use crate::solve::{sparse_from_triplets, SolveError, SparseMatrix};
 /// Edge cotangent weights `w_ij = ½(cot α + cot β)` summed over the local faces, as
 /// `(i, j, w)` for both orders.
 pub fn cotan_weights(p: &EditProblem, clamp_negative: bool) -> Vec<(usize, usize, f64)> {
-    let x = &p.rest;
+    cotan_weights_at(p, &p.rest, clamp_negative)
+}
+
+/// [`cotan_weights`] of the local faces at positions `x` (one per local vertex). Clamped
+/// weights are summed per edge first and come sorted by `(i, j)`.
+pub fn cotan_weights_at(
+    p: &EditProblem,
+    x: &[Vec3],
+    clamp_negative: bool,
+) -> Vec<(usize, usize, f64)> {
     let mut t = Vec::with_capacity(p.faces.len() * 6);
     for f in &p.faces {
         for k in 0..3 {
@@ -20,15 +29,35 @@ pub fn cotan_weights(p: &EditProblem, clamp_negative: bool) -> Vec<(usize, usize
         }
     }
     if clamp_negative {
-        let mut sums = std::collections::HashMap::with_capacity(t.len());
-        for &(i, j, w) in &t {
-            *sums.entry((i, j)).or_insert(0.0) += w;
+        // Grouped by row (counting sort), each row sorted, each edge's halves summed.
+        let n = x.len();
+        let mut start = vec![0usize; n + 1];
+        for &(i, _, _) in &t {
+            start[i + 1] += 1;
         }
-        t = sums
-            .into_iter()
-            .map(|((i, j), w)| (i, j, f64::max(w, 0.0)))
-            .collect();
-        t.sort_unstable_by_key(|a| (a.0, a.1));
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut next = start.clone();
+        let mut rows = vec![(0usize, 0.0f64); t.len()];
+        for &(i, j, w) in &t {
+            rows[next[i]] = (j, w);
+            next[i] += 1;
+        }
+        t.clear();
+        for i in 0..n {
+            let row = &mut rows[start[i]..start[i + 1]];
+            row.sort_unstable_by_key(|e| e.0);
+            for &(j, w) in row.iter() {
+                match t.last_mut() {
+                    Some(last) if last.0 == i && last.1 == j => last.2 += w,
+                    _ => t.push((i, j, w)),
+                }
+            }
+        }
+        for e in &mut t {
+            e.2 = e.2.max(0.0);
+        }
     }
     t
 }

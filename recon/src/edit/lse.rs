@@ -149,12 +149,12 @@ fn terms(problem: &EditProblem, rot: &[Mat3]) -> Result<Terms, EditError> {
     let t = vec![
         QuadTerm {
             a: lap,
-            metric: None,
+            a_t_w: None,
             weight: 1.0,
         },
         QuadTerm {
             a: s.finish()?,
-            metric: None,
+            a_t_w: None,
             weight: 1.0,
         },
     ];
@@ -330,7 +330,7 @@ impl EditMethod for LseEditor {
         let rot = vec![Mat3::identity(); problem.len()];
         let (t, lap_rhs) = terms(problem, &rot)?;
         let x0 = Mat::from_fn(3 * problem.len(), 1, |d, _| problem.rest[d / 3][d % 3]);
-        let base = FactoredQuadratic::new(3 * problem.len(), &t, &ring_dofs(problem), Some(x0))?;
+        let base = FactoredQuadratic::new(3 * problem.len(), t, &ring_dofs(problem), Some(x0))?;
         let (soft, _) = soft_rows(problem);
         Ok(Self {
             base,
@@ -355,7 +355,7 @@ impl EditMethod for LseEditor {
             for _ in 0..self.options.refit_iterations {
                 rot = Self::fitted_rotations(problem, &x, &rot);
                 let (t, lap_rhs) = terms(problem, &rot)?;
-                work.refactor(&t)?;
+                work.refactor(t)?;
                 x = self.solve_with(&work, &lap_rhs, problem, &targets)?;
             }
         }
@@ -365,5 +365,15 @@ impl EditMethod for LseEditor {
 
     fn factor_len(&self) -> usize {
         self.base.factor_len()
+    }
+
+    fn factor_parts(&self) -> Vec<(&'static str, f64)> {
+        let t = self.base.timings();
+        vec![
+            ("assemble", t.assemble_ms),
+            ("ordering", t.analyze_ms),
+            ("cholesky", t.numeric_ms),
+            ("shared_rhs", t.shared_ms),
+        ]
     }
 }

@@ -1,6 +1,7 @@
 //! One-call editing for the CLI: resolve, factor, solve, measure (`fires edit`), and the
 //! repeated-move benchmark (`fires bench edit`).
 
+use std::collections::BTreeMap;
 use std::str::FromStr;
 use std::time::Instant;
 
@@ -152,6 +153,11 @@ pub struct BenchEditReport {
     /// LSE only: median move from the precomputed affine responses (no solve), ms.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub per_move_basis_ms: Option<f64>,
+    /// Where `factor_ms` went, by part (implicit: the first system, Eq. 2.8, and its
+    /// assembly, ordering, numeric factorisation and shared right-hand side, then the
+    /// second system, Eq. 2.10; LSE: its system's parts), ms.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub factor_parts: BTreeMap<String, f64>,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -206,12 +212,15 @@ fn bench_move(p: &EditProblem, k: usize, scale: f64) -> Vec<Similarity> {
     }]
 }
 
+/// Factor time, per-move times, factor entries and the factor's parts of one method.
+type BenchRun = (f64, Vec<f64>, usize, BTreeMap<String, f64>);
+
 fn bench_method<M: EditMethod>(
     p: &EditProblem,
     o: &M::Options,
     moves: usize,
     scale: f64,
-) -> Result<(f64, Vec<f64>, usize), EditError> {
+) -> Result<BenchRun, EditError> {
     let t = Instant::now();
     let mut m = M::factor(p, o)?;
     let f = ms(t);
@@ -223,7 +232,12 @@ fn bench_method<M: EditMethod>(
         per.push(ms(t));
         std::hint::black_box(x);
     }
-    Ok((f, per, m.factor_len()))
+    let parts = m
+        .factor_parts()
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect();
+    Ok((f, per, m.factor_len(), parts))
 }
 
 /// `fires bench edit`: one factorisation, then `moves` handle moves; the same ROI's
@@ -265,7 +279,7 @@ pub fn bench_edit(
     }
     let mut basis_ms = None;
     let mut per_move_basis_ms = None;
-    let (factor_ms, per, entries) = match method {
+    let (factor_ms, per, entries, factor_parts) = match method {
         Method::Lse => {
             let r = bench_method::<LseEditor>(&p, &LseOptions::default(), moves, scale)?;
             let lse = LseEditor::factor(&p, &LseOptions::default())?;
@@ -304,5 +318,6 @@ pub fn bench_edit(
         factor_entries: entries,
         basis_ms,
         per_move_basis_ms,
+        factor_parts,
     })
 }

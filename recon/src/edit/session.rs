@@ -24,6 +24,11 @@ pub trait EditMethod: Sized {
     ) -> Result<Vec<Vec3>, EditError>;
     /// Stored entries of the method's Cholesky factors (for reports).
     fn factor_len(&self) -> usize;
+    /// Where the factorisation's time went, ms, by part (for benchmark reports; the parts
+    /// a method does not break down are absent).
+    fn factor_parts(&self) -> Vec<(&'static str, f64)> {
+        Vec::new()
+    }
 }
 
 /// Counters of the work a session did (the interactive contract: moves never factor).

@@ -4,28 +4,35 @@
 //! [`crate::solve::FixedSolver`] does for an assembled matrix).
 //!
 //! The fixed columns of every `Aₜ` are split off: the factored matrix is
-//! `Σ wₜ A_{t,u}ᵀ Wₜ A_{t,u}`; a solve forms `Σ wₜ A_{t,u}ᵀ Wₜ (bₜ − A_{t,k} x_k)` and
-//! back-substitutes. Changing `bₜ` or the fixed values costs no factorisation;
+//! `Σ wₜ A_{t,u}ᵀ Wₜ A_{t,u}`, of which only the lower triangle is formed (one sparse
+//! product pass over all terms, [`crate::solve::lower_product_sum`]); a solve forms
+//! `Σ wₜ A_{t,u}ᵀ Wₜ (bₜ − A_{t,k} x_k)` and back-substitutes. A metric `Wₜ` enters only
+//! through `AₜᵀWₜ`, which the caller builds from what it knows of `Wₜ` (implicit editing's
+//! coherence Laplacian), since a general product with a wide metric costs more than the
+//! factorisation's own analysis. Changing `bₜ` or the fixed values costs no factorisation;
 //! [`FactoredQuadratic::refactor`] redoes only the numeric factorisation for new values
 //! of the same pattern (LSE's re-fitting iterations).
 
-use faer::sparse::linalg::matmul::sparse_sparse_matmul;
-use faer::sparse::ops::add;
-use faer::sparse::{SparseRowMat, SymbolicSparseColMat, SymbolicSparseRowMat};
-use faer::{Mat, MatRef, Par};
+use std::time::Instant;
+
+use faer::sparse::SymbolicSparseColMat;
+use faer::{Mat, MatRef};
 
 use crate::solve::{
-    sparse_from_triplets, sparse_mul_dense, CholeskyOptions, CholeskySolver, SharedRhs, SolveError,
-    SparseMatrix,
+    lower_product_sum, sparse_mul_dense, transpose, CholeskyOptions, CholeskySolver, SharedRhs,
+    SolveError, SparseMatrix,
 };
 
-/// One term `w (A x − b)ᵀ W (A x − b)` (`W = I` when `metric` is `None`).
+/// One term `w (A x − b)ᵀ W (A x − b)` (`W = I` when `a_t_w` is `None`).
 #[derive(Debug, Clone)]
 pub struct QuadTerm {
     /// `m × n` operator.
     pub a: SparseMatrix,
-    /// Optional symmetric positive semidefinite `m × m` metric.
-    pub metric: Option<SparseMatrix>,
+    /// `Aᵀ W` (`n × m`) for a symmetric positive semidefinite `m × m` metric `W`: the
+    /// energy's gradient needs `W` only through it (`AᵀWA x = AᵀW b`), and a caller who
+    /// knows `W`'s structure forms it far cheaper than a general product
+    /// ([`RowBuilder::finish_transposed`] stores its columns as they are built).
+    pub a_t_w: Option<SparseMatrix>,
     /// Weight `w ≥ 0`.
     pub weight: f64,
 }
@@ -54,65 +61,56 @@ pub struct FactoredQuadratic {
     /// `−Σ w A_uᵀ W A x₀`, forward-substituted once per factorisation, so a solve
     /// forward-substitutes only the rows a move changes.
     shared: Option<SharedRhs>,
+    timings: FactorTimings,
 }
 
-fn fe(_: faer::sparse::FaerError) -> SolveError {
-    SolveError::OutOfMemory
+/// Where a [`FactoredQuadratic`]'s precomputation went, in milliseconds (for benchmarks).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FactorTimings {
+    /// Splitting the terms and forming the lower triangle of the normal matrix.
+    pub assemble_ms: f64,
+    /// Fill-reducing ordering and symbolic analysis.
+    pub analyze_ms: f64,
+    /// Numeric Cholesky factorisation.
+    pub numeric_ms: f64,
+    /// Forward substitution of the reference's shared right-hand side.
+    pub shared_ms: f64,
 }
 
-/// `Aᵀ` as a column-major matrix.
-pub fn transpose(a: &SparseMatrix) -> Result<SparseMatrix, SolveError> {
-    a.as_ref().transpose().to_col_major().map_err(fe)
+fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
 }
 
-/// `A B`, with sorted columns.
-pub fn matmul(a: &SparseMatrix, b: &SparseMatrix) -> Result<SparseMatrix, SolveError> {
-    if a.ncols() != b.nrows() {
-        return Err(SolveError::Dimension(format!(
-            "{}x{} times {}x{}",
-            a.nrows(),
-            a.ncols(),
-            b.nrows(),
-            b.ncols()
-        )));
-    }
-    let p = sparse_sparse_matmul(a.as_ref(), b.as_ref(), 1.0, Par::Seq).map_err(fe)?;
-    sort_columns(p)
-}
-
-/// The same matrix with the row indices of every column in ascending order (duplicates
-/// kept; none arise from faer's products).
-fn sort_columns(m: SparseMatrix) -> Result<SparseMatrix, SolveError> {
-    let (nrows, ncols) = (m.nrows(), m.ncols());
-    let sorted = (0..ncols).all(|j| m.as_ref().row_idx_of_col_raw(j).is_sorted());
-    if sorted && m.as_ref().col_nnz().is_none() {
-        return Ok(m);
-    }
-    let mut col_ptr = Vec::with_capacity(ncols + 1);
-    let mut row_idx = Vec::with_capacity(m.compute_nnz());
-    let mut vals = Vec::with_capacity(m.compute_nnz());
-    col_ptr.push(0);
-    let mut buf: Vec<(usize, f64)> = Vec::new();
+/// The rows of `p` whose `slot` is an unknown's (`< nu`), renumbered to it, in place.
+/// Unknown slots grow with the index, so sorted columns stay sorted.
+fn unknown_rows(p: SparseMatrix, slot: &[usize], nu: usize) -> SparseMatrix {
+    let (symbolic, mut vals) = p.into_parts();
+    let (_, ncols, mut col_ptr, col_nnz, mut row_idx) = symbolic.into_parts();
+    let mut out = 0;
+    let mut start = col_ptr[0];
     for j in 0..ncols {
-        buf.clear();
-        buf.extend(
-            m.as_ref()
-                .row_idx_of_col_raw(j)
-                .iter()
-                .copied()
-                .zip(m.as_ref().val_of_col(j).iter().copied()),
-        );
-        buf.sort_unstable_by_key(|e| e.0);
-        for &(i, v) in &buf {
-            row_idx.push(i);
-            vals.push(v);
+        let end = col_nnz
+            .as_ref()
+            .map_or(col_ptr[j + 1], |nnz| start + nnz[j]);
+        let next = col_ptr[j + 1];
+        col_ptr[j] = out;
+        for k in start..end {
+            let i = row_idx[k];
+            if slot[i] < nu {
+                row_idx[out] = slot[i];
+                vals[out] = vals[k];
+                out += 1;
+            }
         }
-        col_ptr.push(row_idx.len());
+        start = next;
     }
-    Ok(SparseMatrix::new(
-        SymbolicSparseColMat::new_checked(nrows, ncols, col_ptr, None, row_idx),
+    col_ptr[ncols] = out;
+    row_idx.truncate(out);
+    vals.truncate(out);
+    SparseMatrix::new(
+        SymbolicSparseColMat::new_checked(nu, ncols, col_ptr, None, row_idx),
         vals,
-    ))
+    )
 }
 
 /// `a` scaled by `s`.
@@ -142,6 +140,19 @@ impl RowBuilder {
             row_ptr: vec![0],
             col_idx: Vec::new(),
             vals: Vec::new(),
+            buf: Vec::new(),
+        }
+    }
+
+    /// An empty matrix with `ncols` columns and room for `rows` rows of `nnz` entries in all.
+    pub fn with_capacity(ncols: usize, rows: usize, nnz: usize) -> Self {
+        let mut row_ptr = Vec::with_capacity(rows + 1);
+        row_ptr.push(0);
+        Self {
+            ncols,
+            row_ptr,
+            col_idx: Vec::with_capacity(nnz),
+            vals: Vec::with_capacity(nnz),
             buf: Vec::new(),
         }
     }
@@ -178,14 +189,19 @@ impl RowBuilder {
         Ok(())
     }
 
-    /// The matrix in column-major storage.
-    pub fn finish(self) -> Result<SparseMatrix, SolveError> {
+    /// The transpose of the matrix (`ncols × nrows`, column `i` is row `i` as pushed, rows
+    /// ascending), at no cost: what [`QuadTerm::a_t_w`] takes.
+    pub fn finish_transposed(self) -> SparseMatrix {
         let nrows = self.nrows();
-        let rows = SparseRowMat::new(
-            SymbolicSparseRowMat::new_checked(nrows, self.ncols, self.row_ptr, None, self.col_idx),
+        SparseMatrix::new(
+            SymbolicSparseColMat::new_checked(self.ncols, nrows, self.row_ptr, None, self.col_idx),
             self.vals,
-        );
-        rows.to_col_major().map_err(fe)
+        )
+    }
+
+    /// The matrix in column-major storage (rows ascending in every column).
+    pub fn finish(self) -> Result<SparseMatrix, SolveError> {
+        Ok(transpose(self.finish_transposed().as_ref()))
     }
 }
 
@@ -244,7 +260,7 @@ impl FactoredQuadratic {
     /// round-off instead of to the conditioning of the normal equations.
     pub fn new(
         n: usize,
-        terms: &[QuadTerm],
+        terms: Vec<QuadTerm>,
         known: &[usize],
         x0: Option<Mat<f64>>,
     ) -> Result<Self, SolveError> {
@@ -269,10 +285,22 @@ impl FactoredQuadratic {
         if x0.as_ref().is_some_and(|x| x.nrows() != n) {
             return Err(SolveError::Dimension("reference has the wrong size".into()));
         }
+        let clock = Instant::now();
         let (parts, gram) = Self::assemble(&slot, unknown.len(), kept.len(), terms, x0.as_ref())?;
-        let chol = CholeskySolver::new(gram.as_ref(), CholeskyOptions::default())?;
+        let assemble_ms = ms_since(clock);
+        let mut chol = CholeskySolver::analyze(gram.as_ref(), CholeskyOptions::default())?;
+        let analyze_ms = ms_since(clock) - assemble_ms;
+        chol.factorize(gram.as_ref())?;
+        let numeric_ms = ms_since(clock) - assemble_ms - analyze_ms;
         let shared = Self::shared_rhs(&chol, &parts)?;
+        let timings = FactorTimings {
+            assemble_ms,
+            analyze_ms,
+            numeric_ms,
+            shared_ms: ms_since(clock) - assemble_ms - analyze_ms - numeric_ms,
+        };
         Ok(Self {
+            timings,
             n,
             unknown,
             known: kept,
@@ -299,32 +327,36 @@ impl FactoredQuadratic {
         sum.map(|b| chol.share_rhs(b.as_ref())).transpose()
     }
 
+    /// Each term's parts and the lower triangle of `Σ w A_uᵀ W A_u` (all a factor reads).
     fn assemble(
         slot: &[usize],
         nu: usize,
         nk: usize,
-        terms: &[QuadTerm],
+        terms: Vec<QuadTerm>,
         x0: Option<&Mat<f64>>,
     ) -> Result<(Vec<TermParts>, SparseMatrix), SolveError> {
         let mut parts = Vec::with_capacity(terms.len());
-        let mut gram: Option<SparseMatrix> = None;
-        for t in terms {
+        let mut ops = Vec::with_capacity(terms.len());
+        for mut t in terms {
             let (a_u, a_k) = split_columns(&t.a, slot, nu, nk)?;
-            let at = transpose(&a_u)?;
-            let at_w = match &t.metric {
-                Some(w) => matmul(&at, w)?,
-                None => at,
+            let at_w = match t.a_t_w.take() {
+                Some(p) if p.nrows() != slot.len() || p.ncols() != t.a.nrows() => {
+                    return Err(SolveError::Dimension(format!(
+                        "AᵀW is {}x{}, A {}x{}",
+                        p.nrows(),
+                        p.ncols(),
+                        t.a.nrows(),
+                        t.a.ncols()
+                    )))
+                }
+                Some(p) => unknown_rows(p, slot, nu),
+                None => unknown_rows(transpose(t.a.as_ref()), slot, nu),
             };
             let at_w = if t.weight == 1.0 {
                 at_w
             } else {
                 scaled(at_w, t.weight)
             };
-            let g = matmul(&at_w, &a_u)?;
-            gram = Some(match gram {
-                None => g,
-                Some(acc) => sort_columns(add(acc.as_ref(), g.as_ref()).map_err(fe)?)?,
-            });
             let rhs_x0 = match x0 {
                 Some(x) => {
                     let ax = sparse_mul_dense(t.a.as_ref(), x.as_ref())?;
@@ -338,16 +370,19 @@ impl FactoredQuadratic {
                 rows: t.a.nrows(),
                 rhs_x0,
             });
+            ops.push(a_u);
         }
-        let gram = match gram {
-            Some(g) => g,
-            None => sparse_from_triplets(nu, nu, &[])?,
-        };
+        let pairs: Vec<_> = parts
+            .iter()
+            .zip(&ops)
+            .map(|(p, a_u)| (p.at_w.as_ref(), a_u.as_ref()))
+            .collect();
+        let gram = lower_product_sum(nu, &pairs)?;
         Ok((parts, gram))
     }
 
     /// New values for terms of the same shapes and patterns: numeric refactorisation only.
-    pub fn refactor(&mut self, terms: &[QuadTerm]) -> Result<(), SolveError> {
+    pub fn refactor(&mut self, terms: Vec<QuadTerm>) -> Result<(), SolveError> {
         let (parts, gram) = Self::assemble(
             &self.slot,
             self.unknown.len(),
@@ -359,6 +394,11 @@ impl FactoredQuadratic {
         self.shared = Self::shared_rhs(&self.chol, &parts)?;
         self.parts = parts;
         Ok(())
+    }
+
+    /// Where the first factorisation's time went.
+    pub fn timings(&self) -> FactorTimings {
+        self.timings
     }
 
     /// Number of unknowns that are solved for.
