@@ -69,8 +69,8 @@ pub enum SolveKernel {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FillOrdering {
     /// From [`ND_MIN_DIM`] unknowns up, whichever of nested dissection and AMD gives the
-    /// smaller factor (both symbolic analyses are run; each costs a fraction of the
-    /// numeric factorisation); AMD below.
+    /// smaller factor (both symbolic analyses are run, on two threads; each costs a
+    /// fraction of the numeric factorisation); AMD below.
     #[default]
     Auto,
     /// faer's approximate minimum degree.

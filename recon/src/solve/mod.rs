@@ -14,7 +14,8 @@
 //!
 //! Threading: everything defaults to `Par::Seq`. On the 2-core machines here faer's
 //! parallel sparse solves were measured 10–16× slower than sequential ones (faer issue
-//! #211); parallelise across right-hand sides instead if needed.
+//! #211); parallelise across right-hand sides instead if needed. The one exception is
+//! `FillOrdering::Auto`'s two independent symbolic analyses, which run on two threads.
 
 mod cholesky;
 mod error;
