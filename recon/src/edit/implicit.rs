@@ -32,7 +32,7 @@ use super::local::{cotan_stiffness, cotan_weights_at, from_mat, gather};
 use super::problem::{EditProblem, Role};
 use super::session::EditMethod;
 use super::similarity::{mat_vec, polar_rotation, to_na, Mat3, Similarity};
-use super::system::{FactoredQuadratic, QuadTerm, RowBuilder};
+use super::system::{ms_since, FactoredQuadratic, QuadTerm, RowBuilder};
 use super::EditError;
 use crate::geometry::{triangle_normal, Vec3};
 use crate::solve::{sparse_mul_dense, CholeskyOptions, FixedSolver};
@@ -112,18 +112,44 @@ fn eigen_extremes(a: &Matrix3<f64>) -> (f64, f64) {
     (lo, hi)
 }
 
-/// `cond(V Vᵀ)` and `Qᵢ` of vertex `i` for positions `x`.
-fn fit(x: &[Vec3], stencil: &[usize]) -> (f64, Option<Vec<[f64; 3]>>) {
+/// The stencil of vertex `i` about its ring's centroid (`V`'s columns) and `V Vᵀ`;
+/// `None` for a vertex without neighbours.
+fn centred_stencil(
+    x: &[Vec3],
+    stencil: &[usize],
+) -> Option<(Vec<nalgebra::Vector3<f64>>, Matrix3<f64>)> {
     let k = stencil.len() - 1;
     if k == 0 {
-        return (f64::INFINITY, None);
+        return None;
     }
     let c0 = stencil[1..].iter().fold(Vec3::ZERO, |a, &j| a + x[j]) / k as f64;
-    // V's columns: the stencil about the ring's centroid.
     let v: Vec<nalgebra::Vector3<f64>> = stencil.iter().map(|&s| to_na(x[s] - c0)).collect();
     let vvt: Matrix3<f64> = v.iter().map(|d| d * d.transpose()).sum();
-    let (lo, hi) = eigen_extremes(&vvt);
-    let cond = if lo > 0.0 { hi / lo } else { f64::INFINITY };
+    Some((v, vvt))
+}
+
+/// `cond(V Vᵀ)` from its extreme eigenvalues (infinite when singular).
+fn condition(vvt: &Matrix3<f64>) -> f64 {
+    let (lo, hi) = eigen_extremes(vvt);
+    if lo > 0.0 {
+        hi / lo
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// `cond(V Vᵀ)` of vertex `i` for positions `x`, without fitting `Qᵢ`: the degenerate-vertex test.
+fn stencil_condition(x: &[Vec3], stencil: &[usize]) -> f64 {
+    centred_stencil(x, stencil).map_or(f64::INFINITY, |(_, vvt)| condition(&vvt))
+}
+
+/// `cond(V Vᵀ)` and `Qᵢ` of vertex `i` for positions `x`.
+fn fit(x: &[Vec3], stencil: &[usize]) -> (f64, Option<Vec<[f64; 3]>>) {
+    let Some((v, vvt)) = centred_stencil(x, stencil) else {
+        return (f64::INFINITY, None);
+    };
+    let k = stencil.len() - 1;
+    let cond = condition(&vvt);
     let Some(inv) = vvt.try_inverse() else {
         return (cond, None);
     };
@@ -396,8 +422,7 @@ impl EditMethod for ImplicitEditor {
         let mut x = problem.rest.clone();
         let mut n_degenerate = 0;
         for i in 0..n_roi {
-            let (cond, _) = fit(&x, &stencil[i]);
-            if cond > DEGENERATE_COND {
+            if stencil_condition(&x, &stencil[i]) > DEGENERATE_COND {
                 let nb = &problem.neighbors[i];
                 let mean =
                     nb.iter().map(|&j| x[i].distance(x[j])).sum::<f64>() / nb.len().max(1) as f64;
@@ -486,7 +511,7 @@ impl EditMethod for ImplicitEditor {
         ];
         let x0 = Mat::from_fn(n, 3, |i, c| x[i][c]);
         let first = FactoredQuadratic::new(n, terms, &problem.constrained(), Some(x0))?;
-        let first_ms = clock.elapsed().as_secs_f64() * 1e3;
+        let first_ms = ms_since(clock);
         let k = cotan_stiffness(problem)?;
         let kv = sparse_mul_dense(
             k.as_ref(),
@@ -497,7 +522,7 @@ impl EditMethod for ImplicitEditor {
             &problem.constrained(),
             CholeskyOptions::default(),
         )?;
-        let second_ms = clock.elapsed().as_secs_f64() * 1e3 - first_ms;
+        let second_ms = ms_since(clock) - first_ms;
         Ok(Self {
             first,
             second,

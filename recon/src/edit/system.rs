@@ -77,7 +77,8 @@ pub struct FactorTimings {
     pub shared_ms: f64,
 }
 
-fn ms_since(t: Instant) -> f64 {
+/// Milliseconds elapsed since `t`, the unit every factor timing is reported in.
+pub(crate) fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
