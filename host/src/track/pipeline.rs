@@ -33,9 +33,11 @@ mod config;
 mod labelling;
 mod line_order;
 mod merged;
+mod pen_fit;
 mod pen_line;
 #[cfg(test)]
 mod pen_line_tests;
+mod pen_ray;
 mod pixel_noise;
 mod prior;
 mod refusal;
@@ -342,13 +344,16 @@ impl Tracker {
         };
         // Stereo candidates.
         let (left, right) = (&self.points.left_norm, &self.points.right_norm);
-        let cands = self.correspondences.compute(
+        self.correspondences.compute(
             &self.rig,
             &self.triangulator,
             &self.config.correspondence,
             left,
             right,
         );
+        self.widen_for_extrapolation();
+        let (left, right) = (&self.points.left_norm, &self.points.right_norm);
+        let cands = &self.correspondences.candidates;
         let stale = direction_sigma.is_some_and(|s| s > self.config.identify.prior_sigma);
         // Identification.
         self.last_refusal = None;
@@ -548,6 +553,44 @@ impl Tracker {
         let axis_var = axis_variance? * if fused_axis { 0.1 } else { 1.0 };
         let var = centroid_var + lever * lever * axis_var;
         (var.is_finite() && var > 0.0).then(|| var.sqrt())
+    }
+
+    /// Widens each stereo candidate's covariance by the error of moving its other-camera blob
+    /// to the pair's time at constant velocity ([`align::extrapolation_error`]): under a fast
+    /// turn of the pen, a pair whose other camera was exposed most of a frame earlier is worth
+    /// less than one completed just after it, and its tip's uncertainty says so.
+    fn widen_for_extrapolation(&mut self) {
+        let sigma = self.config.correspondence.pixel_sigma;
+        let other = 1 - self.points.this;
+        if sigma <= 0.0 {
+            return;
+        }
+        let focal = [self.rig.left.focal_px(), self.rig.right.focal_px()];
+        let (left, right) = (&self.points.left_norm, &self.points.right_norm);
+        for cand in &mut self.correspondences.candidates {
+            let blob = if other == 0 { cand.left } else { cand.right };
+            let error = self
+                .points
+                .aligned_error_px
+                .get(blob)
+                .copied()
+                .unwrap_or(0.0);
+            if error <= 0.0 {
+                continue;
+            }
+            let mut px = [sigma; 2];
+            px[other] = sigma.hypot(error);
+            let (Some(&ml), Some(&mr)) = (left.get(cand.left), right.get(cand.right)) else {
+                continue;
+            };
+            cand.covariance = crate::stereo::correspond::covariance(
+                &self.triangulator,
+                ml,
+                mr,
+                &cand.point,
+                [px[0] / focal[0], px[1] / focal[1]],
+            );
+        }
     }
 
     /// Specific force at the tip in the pen frame: the accelerometer's plus the lever-arm terms

@@ -50,13 +50,16 @@ impl KeptFrame {
     }
 }
 
-/// The current and the previous frame of one camera.
+/// The current and the two previous frames of one camera.
 #[derive(Debug, Clone, Default)]
 pub(super) struct CameraHistory {
     /// The newest frame.
     pub(super) current: Option<KeptFrame>,
     /// The frame before it.
     pub(super) previous: Option<KeptFrame>,
+    /// The frame before that: with the other two it measures a blob's image acceleration, which
+    /// bounds the error of moving it at constant velocity.
+    pub(super) older: Option<KeptFrame>,
 }
 
 impl CameraHistory {
@@ -68,6 +71,7 @@ impl CameraHistory {
         radii: Vec<f64>,
         blob_delay_ns: Vec<f64>,
     ) {
+        self.older = self.previous.take();
         self.previous = self.current.take();
         self.current = Some(KeptFrame {
             t_ns,
@@ -126,6 +130,9 @@ pub(super) struct PairPoints {
     pub(super) own: Vec<[f64; 2]>,
     /// Image velocity of each of those blobs, pixels per nanosecond (None: not moved).
     pub(super) aligned_velocity: Vec<Option<[f64; 2]>>,
+    /// Per blob of the other camera, the error of moving it at constant velocity that its image
+    /// acceleration predicts, pixels (0: not moved, or no acceleration measured).
+    pub(super) aligned_error_px: Vec<f64>,
     /// Undistorted left points.
     pub(super) left_norm: Vec<[f64; 2]>,
     /// Undistorted right points.
@@ -237,14 +244,17 @@ impl TimeAlignment {
         points.this = this;
         points.aligned.clear();
         points.aligned_velocity.clear();
+        points.aligned_error_px.clear();
         if let Some(cur) = &self.cameras[other].current {
             points.aligned.extend_from_slice(&cur.blobs);
             points.aligned_velocity.resize(cur.blobs.len(), None);
+            points.aligned_error_px.resize(cur.blobs.len(), 0.0);
         }
         if self.options.time_align {
-            for (i, moved, v) in self.alignment(rig, other, t) {
-                points.aligned[i] = moved;
-                points.aligned_velocity[i] = Some(v);
+            for m in self.alignment(rig, other, t) {
+                points.aligned[m.blob] = m.moved;
+                points.aligned_velocity[m.blob] = Some(m.velocity);
+                points.aligned_error_px[m.blob] = m.error_px;
             }
         }
         points.own.clear();
@@ -252,8 +262,8 @@ impl TimeAlignment {
             points.own.extend_from_slice(&cur.blobs);
         }
         if self.options.time_align && self.options.row_time_ns[this] > 0.0 {
-            for (i, moved, _) in self.alignment(rig, this, t) {
-                points.own[i] = moved;
+            for m in self.alignment(rig, this, t) {
+                points.own[m.blob] = m.moved;
             }
         }
         let (l_px, r_px): (&[[f64; 2]], &[[f64; 2]]) = if this == 0 {
@@ -265,21 +275,17 @@ impl TimeAlignment {
         undistort_all(&rig.right, r_px, &mut points.right_norm);
     }
 
-    /// Where the other camera's current blobs would be at `t`: (blob index, moved position,
-    /// image velocity in pixels per nanosecond) for every blob whose LED is known. The velocity is
-    /// measured between the same LED's blobs in the previous and current frame of that camera;
-    /// without a previous blob it is the predicted pen motion projected into the image.
+    /// Where the other camera's current blobs would be at `t` ([`MovedBlob`]) for every blob
+    /// whose LED is known. The velocity is measured between the same LED's blobs in the previous
+    /// and current frame of that camera; without a previous blob it is the predicted pen motion
+    /// projected into the image. With the same LED's blob in the frame before, the image
+    /// acceleration gives the move's error (see [`extrapolation_error`]).
     ///
     /// Blobs are matched by LED identity (labels of earlier vision samples, or the predicted LED
     /// images), never by nearest neighbour: at 15-30 frames/s a fast pen moves about one LED
     /// spacing per frame, a nearest-neighbour velocity then aliases to the neighbouring LED, and
     /// the whole pen shifts by one LED into a consistent but wrongly labelled configuration.
-    pub(super) fn alignment(
-        &self,
-        rig: &StereoRig,
-        other: usize,
-        t: u64,
-    ) -> Vec<(usize, [f64; 2], [f64; 2])> {
+    pub(super) fn alignment(&self, rig: &StereoRig, other: usize, t: u64) -> Vec<MovedBlob> {
         let history = &self.cameras[other];
         let Some(cur) = &history.current else {
             return Vec::new();
@@ -295,6 +301,13 @@ impl TimeAlignment {
             .as_ref()
             .filter(|p| p.t_ns < cur.t_ns && cur.t_ns - p.t_ns <= 100_000_000);
         let prev_ids = prev.map(|p| self.frame_identities(rig, camera, p));
+        let older = prev.and_then(|p| {
+            history
+                .older
+                .as_ref()
+                .filter(|o| o.t_ns < p.t_ns && p.t_ns - o.t_ns <= 100_000_000)
+        });
+        let older_ids = older.map(|o| self.frame_identities(rig, camera, o));
         let shift = t as f64 - cur.t_ns as f64;
         // Predicted LEDs at the frame's time and at this one (or, when they coincide, one prediction
         // step later: a rolling shutter still moves the blobs), computed once per frame.
@@ -314,12 +327,29 @@ impl TimeAlignment {
             let Some(i) = *id else { continue };
             let b = cur.blobs[i];
             let own_shift = shift - cur.delay(i);
+            let mut error_px = 0.0;
             let measured = prev.zip(prev_ids).and_then(|(p, ids)| {
                 let j = ids[k]?;
                 let q = p.blobs[j];
                 let dt = cur.blob_time(i) - p.blob_time(j);
-                ((b[0] - q[0]).hypot(b[1] - q[1]) <= self.options.max_blob_motion_px && dt > 0.0)
-                    .then(|| [(b[0] - q[0]) / dt, (b[1] - q[1]) / dt])
+                let near = (b[0] - q[0]).hypot(b[1] - q[1]) <= self.options.max_blob_motion_px;
+                let v = (near && dt > 0.0).then(|| [(b[0] - q[0]) / dt, (b[1] - q[1]) / dt])?;
+                // The same LED one frame earlier: the acceleration between the two velocities.
+                let before = older.zip(older_ids).and_then(|(o, ids)| {
+                    let n = ids[k]?;
+                    let r = o.blobs[n];
+                    let dt0 = p.blob_time(j) - o.blob_time(n);
+                    let near = (q[0] - r[0]).hypot(q[1] - r[1]) <= self.options.max_blob_motion_px;
+                    (near && dt0 > 0.0).then(|| ([(q[0] - r[0]) / dt0, (q[1] - r[1]) / dt0], dt0))
+                });
+                if let Some((v0, dt0)) = before {
+                    let a = [
+                        (v[0] - v0[0]) / (0.5 * (dt + dt0)),
+                        (v[1] - v0[1]) / (0.5 * (dt + dt0)),
+                    ];
+                    error_px = extrapolation_error(a[0].hypot(a[1]), dt, own_shift);
+                }
+                Some(v)
             });
             let v = measured.or_else(|| {
                 // One pose predicts no motion: the blob is not moved, and says so (None).
@@ -327,10 +357,17 @@ impl TimeAlignment {
                     return None;
                 }
                 let (a, c) = (project(at_frame, k)?, project(at_target, k)?);
-                Some([(c[0] - a[0]) / step, (c[1] - a[1]) / step])
+                let v = [(c[0] - a[0]) / step, (c[1] - a[1]) / step];
+                error_px = UNMEASURED_MOVE_ERROR * v[0].hypot(v[1]) * own_shift.abs();
+                Some(v)
             });
             if let Some(v) = v {
-                out.push((i, [b[0] + v[0] * own_shift, b[1] + v[1] * own_shift], v));
+                out.push(MovedBlob {
+                    blob: i,
+                    moved: [b[0] + v[0] * own_shift, b[1] + v[1] * own_shift],
+                    velocity: v,
+                    error_px,
+                });
             }
         }
         if out.is_empty() {
@@ -348,7 +385,12 @@ impl TimeAlignment {
                         continue;
                     }
                     let v = [(b[0] - a[0]) / dt, (b[1] - a[1]) / dt];
-                    out.push((i, [b[0] + v[0] * own_shift, b[1] + v[1] * own_shift], v));
+                    out.push(MovedBlob {
+                        blob: i,
+                        moved: [b[0] + v[0] * own_shift, b[1] + v[1] * own_shift],
+                        velocity: v,
+                        error_px: UNMEASURED_MOVE_ERROR * v[0].hypot(v[1]) * own_shift.abs(),
+                    });
                 }
             }
         }
@@ -447,6 +489,36 @@ impl TimeAlignment {
         Some(std::array::from_fn(|k| p1[k] + velocity(k) * dt))
     }
 }
+
+/// One blob moved to a pair's time ([`TimeAlignment::alignment`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct MovedBlob {
+    /// The blob's index in its frame.
+    pub(super) blob: usize,
+    /// Its position at the pair's time, distorted pixels.
+    pub(super) moved: [f64; 2],
+    /// The image velocity it was moved with, pixels per nanosecond.
+    pub(super) velocity: [f64; 2],
+    /// The move's error that the blob's image acceleration predicts, pixels (0 when unmeasured).
+    pub(super) error_px: f64,
+}
+
+/// The error of moving a blob by `shift` (ns) with the velocity measured over the `dt` (ns)
+/// before it, when its image accelerates at `accel` (px/ns²), pixels. That velocity is the one
+/// at the middle of `dt`, so the true position differs by `a s (dt + s) / 2`: the velocity's
+/// lag over `dt / 2` and the acceleration over the move itself. It is what a chord's flick
+/// costs a pair whose other camera was exposed most of a frame earlier (webcam seed 4: up to
+/// 1.5 px, 5 mm of depth, where the pair completed by that camera's next frame moves it by a
+/// few milliseconds and stays within 0.2 px).
+pub(super) fn extrapolation_error(accel: f64, dt: f64, shift: f64) -> f64 {
+    (0.5 * accel * shift * (dt + shift)).abs()
+}
+
+/// The error of a move whose velocity no LED's own blobs measured, as a fraction of the move: a
+/// velocity predicted from the pen's last poses, or that of blobs matched by their order along
+/// the pen (a merged blob, whose centroid moves as its spots merge and part), can be wrong by
+/// as much as the motion itself under a turn; half the move is the middle of that range.
+const UNMEASURED_MOVE_ERROR: f64 = 0.5;
 
 /// The shortest time between the two vision poses whose difference predicts the pen's motion,
 /// nanoseconds: a quarter of a 60 Hz frame, so that a millimetre of triangulation noise makes at
@@ -606,7 +678,13 @@ mod tests {
         let moved = a.alignment(&rig, 1, 33_000_000);
         assert_eq!(moved.len(), 3);
         let want = at(33_000_000);
-        for (i, p, vel) in moved {
+        for MovedBlob {
+            blob: i,
+            moved: p,
+            velocity: vel,
+            ..
+        } in moved
+        {
             assert!((p[0] - want[i][0]).abs() < 1e-9 && (p[1] - want[i][1]).abs() < 1e-9);
             assert!((vel[0] - v[0]).abs() < 1e-15 && (vel[1] - v[1]).abs() < 1e-15);
         }
@@ -629,6 +707,71 @@ mod tests {
         still.prepare(&rig, 0, 33_000_000, &mut points);
         assert_eq!(points.aligned, at(26_000_000));
         assert!(points.aligned_velocity.iter().all(Option::is_none));
+    }
+
+    /// Blobs accelerating uniformly: the move at the velocity measured over the last frame
+    /// interval misses the true position by exactly the predicted `a s (dt + s) / 2`, for a move
+    /// forwards in time and for one backwards into that interval; at constant velocity (the frame
+    /// before moving on the same line) the predicted error is zero.
+    #[test]
+    fn a_moves_error_is_predicted_from_the_image_acceleration() {
+        let rig = rig();
+        let acc = [3.0e-14, -2.0e-14]; // pixels per ns² (30 000 and -20 000 px/s²: a flick)
+        let v0 = [1.0e-7, 5.0e-8];
+        let start = [[400.0, 300.0], [430.0, 310.0], [450.0, 315.0]];
+        let at = |t: u64| -> Vec<[f64; 2]> {
+            let t = t as f64 - 26e6;
+            start
+                .iter()
+                .map(|b| {
+                    [
+                        b[0] + v0[0] * t + 0.5 * acc[0] * t * t,
+                        b[1] + v0[1] * t + 0.5 * acc[1] * t * t,
+                    ]
+                })
+                .collect()
+        };
+        let labels = [Some(0), Some(1), None, Some(2)];
+        let mut a = TimeAlignment::new(OPTIONS);
+        for t in [10_000_000, 26_000_000, 43_000_000] {
+            a.push(1, t, at(t), Vec::new());
+            a.label(1, labels, [None; LED_COUNT]);
+        }
+        for target in [55_000_000u64, 35_000_000] {
+            let moved = a.alignment(&rig, 1, target);
+            assert_eq!(moved.len(), 3);
+            let want = at(target);
+            for m in moved {
+                let miss = (m.moved[0] - want[m.blob][0]).hypot(m.moved[1] - want[m.blob][1]);
+                let shift = target as f64 - 43e6;
+                let predicted = extrapolation_error(acc[0].hypot(acc[1]), 17e6, shift);
+                assert!(predicted > 0.01, "{predicted}");
+                assert!(
+                    (m.error_px - predicted).abs() < 1e-6 * predicted,
+                    "{} vs {predicted}",
+                    m.error_px
+                );
+                assert!(
+                    (miss - predicted).abs() < 1e-6 * predicted,
+                    "{miss} vs {predicted}"
+                );
+            }
+        }
+        let uniform = |t: u64| -> Vec<[f64; 2]> {
+            start
+                .iter()
+                .map(|b| [b[0] + v0[0] * t as f64, b[1] + v0[1] * t as f64])
+                .collect()
+        };
+        let mut b = TimeAlignment::new(OPTIONS);
+        for t in [10_000_000, 26_000_000, 43_000_000] {
+            b.push(1, t, uniform(t), Vec::new());
+            b.label(1, labels, [None; LED_COUNT]);
+        }
+        assert!(b
+            .alignment(&rig, 1, 55_000_000)
+            .iter()
+            .all(|m| m.error_px < 1e-9));
     }
 
     /// With a rolling shutter every blob was exposed at its own row's time: the frame's time is its
@@ -671,7 +814,10 @@ mod tests {
         let moved = a.alignment(&rig, 1, 33_000_000);
         let want = at(33e6);
         assert_eq!(moved.len(), 3);
-        for (i, p, _) in moved {
+        for MovedBlob {
+            blob: i, moved: p, ..
+        } in moved
+        {
             assert!((p[0] - want[i][0]).hypot(p[1] - want[i][1]) < 1e-6, "{i}");
         }
         // The pair's own camera: every blob at the frame's (median row) time.
@@ -711,7 +857,13 @@ mod tests {
         assert_eq!(moved.len(), 3);
         let mut want = at(100_000_000);
         want.swap(0, 2);
-        for (i, p, vel) in moved {
+        for MovedBlob {
+            blob: i,
+            moved: p,
+            velocity: vel,
+            ..
+        } in moved
+        {
             assert!((p[0] - want[i][0]).abs() < 1e-9 && (p[1] - want[i][1]).abs() < 1e-9);
             assert!((vel[0] - v[0]).abs() < 1e-15 && (vel[1] - v[1]).abs() < 1e-15);
         }

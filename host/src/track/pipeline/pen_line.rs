@@ -25,13 +25,19 @@
 //!   uncorrected inertial direction may have drifted beyond any bound);
 //! * no other labelling (other camera crowded, other LEDs, the mirrored pen, other blobs) passes.
 //!
-//! The LEDs' points are the clear camera's rays met with the crowded camera's pen plane; the
-//! tracker adds them as stereo candidates (the crowded camera's blob being each LED's own or
-//! covering blob) and marks the labelling [`Identification::from_pen_line`], which its merge checks
-//! and the clock-offset estimate leave out (a covering blob is not its LEDs' image).
+//! The LEDs' points are the clear camera's rays met with the crowded camera's pen plane, then
+//! moved to the pen's line fitted to every spot and merged blob of both images, which also gives
+//! their covariance (`pipeline/pen_fit.rs`; a labelling the fit cannot explain is dropped). When
+//! the crowded camera's pen is one compact blob (pointing straight at it), the plane is found
+//! about that blob's ray (`pipeline/pen_ray.rs`). The tracker adds the points as stereo
+//! candidates (the crowded camera's blob being each LED's own or covering blob) and marks the
+//! labelling [`Identification::from_pen_line`], which its merge checks and the clock-offset
+//! estimate leave out (a covering blob is not its LEDs' image).
 
 use super::align::KeptFrame;
 use super::merged::segment_distance;
+use super::pen_fit::fit_pen_line;
+use super::pen_ray::ray_labellings;
 use super::safety::{PairView, MERGE_MARGIN};
 use super::{Tracker, TrackerConfig};
 use crate::stereo::correspond::covariance;
@@ -39,7 +45,7 @@ use crate::stereo::{CameraId, Candidate, StereoRig};
 use crate::track::identify::{Identification, Resolution};
 use crate::track::pen::LED_COUNT;
 use crate::vision::principal_axis;
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 /// What the pen-line labelling needs from the configuration.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,6 +62,8 @@ pub(super) struct LineOptions {
     pub(super) min_sine: f64,
     /// The pen must point within this cosine of the fused direction.
     pub(super) prior_min_cos: f64,
+    /// Standard deviation of a spot's centroid, pixels (the pen-ray fit's covariance).
+    pub(super) pixel_sigma: f64,
 }
 
 impl LineOptions {
@@ -67,6 +75,7 @@ impl LineOptions {
             gate_px: config.correspondence.max_epipolar_px,
             min_sine: MIN_SINE,
             prior_min_cos: config.identify.prior_min_cos,
+            pixel_sigma: config.correspondence.pixel_sigma,
         }
     }
 }
@@ -92,6 +101,10 @@ pub(super) struct LineLed {
     pub(super) crowded_blob: usize,
     /// The clear camera's ray met with the crowded camera's pen plane, world frame, metres.
     pub(super) point: Vector3<f64>,
+    /// The point's covariance once the pen's line was fitted to the images
+    /// (`pipeline/pen_fit.rs`), m²; None before (the tracker then treats the point as a stereo
+    /// pair's).
+    pub(super) covariance: Option<Matrix3<f64>>,
 }
 
 impl Tracker {
@@ -130,7 +143,9 @@ impl Tracker {
             let ml = to_normal(CameraId::Left);
             let mr = to_normal(CameraId::Right);
             let mut cand = Candidate::at(left, right, led.point);
-            if sigma > 0.0 {
+            if let Some(c) = led.covariance {
+                cand.covariance = c;
+            } else if sigma > 0.0 {
                 cand.covariance = covariance(&self.triangulator, ml, mr, &led.point, pixel_sigma);
             }
             assignment[k] = Some(self.correspondences.candidates.len());
@@ -173,21 +188,34 @@ pub(super) fn label_pen_line(
         let gate_c = options.gate_px / pair.rig.camera(crowded).focal_px();
         let gate_k = options.gate_px / pair.rig.camera(clear).focal_px();
         // The crowded camera's candidate pen planes: through two or more collinear blobs, or
-        // along one streak's axis.
+        // along one streak's axis; about the ray of a compact blob, the planes of
+        // `pipeline/pen_ray.rs`.
+        let streaks: Vec<Option<(Vector3<f64>, Vector3<f64>)>> = (0..norm_c.len())
+            .map(|n| streak_plane(pair, crowded, n))
+            .collect();
         let planes_c: Vec<(Vector3<f64>, Vector3<f64>)> = collinear_sets(norm_c, gate_c, 2)
             .into_iter()
             .filter_map(|set| pen_plane(pair.rig, crowded, norm_c, set))
-            .chain((0..norm_c.len()).filter_map(|n| streak_plane(pair, crowded, n)))
+            .chain(streaks.iter().flatten().copied())
             .collect();
         let sets_k = collinear_sets(norm_k, gate_k, 3);
         for set_k in &sets_k {
+            let mut all = Vec::new();
             for plane_c in &planes_c {
-                for l in labellings(pair, options, crowded, plane_c, set_k, direction) {
-                    match &found {
-                        None => found = Some(l),
-                        Some(f) if same_labels(f, &l) => {}
-                        Some(_) => return None,
-                    }
+                let ls = labellings(pair, options, crowded, plane_c, set_k, direction);
+                all.extend(
+                    ls.into_iter()
+                        .filter_map(|l| fit_pen_line(pair, options, l)),
+                );
+            }
+            for n in (0..norm_c.len()).filter(|&n| streaks[n].is_none()) {
+                all.extend(ray_labellings(pair, options, crowded, n, *set_k, direction).ok()?);
+            }
+            for l in all {
+                match &found {
+                    None => found = Some(l),
+                    Some(f) if same_labels(f, &l) => {}
+                    Some(_) => return None,
                 }
             }
         }
@@ -195,14 +223,14 @@ pub(super) fn label_pen_line(
     found
 }
 
-fn other(camera: CameraId) -> CameraId {
+pub(super) fn other(camera: CameraId) -> CameraId {
     match camera {
         CameraId::Left => CameraId::Right,
         CameraId::Right => CameraId::Left,
     }
 }
 
-fn normals<'a>(pair: &PairView<'a>, camera: CameraId) -> &'a [[f64; 2]] {
+pub(super) fn normals<'a>(pair: &PairView<'a>, camera: CameraId) -> &'a [[f64; 2]] {
     match camera {
         CameraId::Left => &pair.points.left_norm,
         CameraId::Right => &pair.points.right_norm,
@@ -210,7 +238,7 @@ fn normals<'a>(pair: &PairView<'a>, camera: CameraId) -> &'a [[f64; 2]] {
 }
 
 /// Same crowded camera and the same clear-camera blob for every LED.
-fn same_labels(a: &LineLabelling, b: &LineLabelling) -> bool {
+pub(super) fn same_labels(a: &LineLabelling, b: &LineLabelling) -> bool {
     a.crowded == b.crowded
         && a.leds
             .iter()
@@ -325,7 +353,7 @@ fn to_world(
 }
 
 /// The world-frame ray (origin, unit direction) of normalised point `m` of `camera`.
-fn ray(rig: &StereoRig, camera: CameraId, m: [f64; 2]) -> (Vector3<f64>, Vector3<f64>) {
+pub(super) fn ray(rig: &StereoRig, camera: CameraId, m: [f64; 2]) -> (Vector3<f64>, Vector3<f64>) {
     let d = Vector3::new(m[0], m[1], 1.0).normalize();
     match camera {
         CameraId::Left => (Vector3::zeros(), d),
@@ -336,7 +364,7 @@ fn ray(rig: &StereoRig, camera: CameraId, m: [f64; 2]) -> (Vector3<f64>, Vector3
 /// Every labelling of the clear camera's blobs in `set_k` along the pen line that the crowded
 /// camera's pen plane `plane_c` (unit normal, a point) spans with them, that passes the checks
 /// of the module doc.
-fn labellings(
+pub(super) fn labellings(
     pair: &PairView<'_>,
     options: &LineOptions,
     crowded: CameraId,
@@ -430,6 +458,7 @@ fn labellings(
                     clear_blob: a.1,
                     crowded_blob: n,
                     point: a.2,
+                    covariance: None,
                 });
             }
             if leds.iter().flatten().count() < 3 {

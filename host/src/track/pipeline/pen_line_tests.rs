@@ -237,21 +237,28 @@ fn scene_of(
 
 /// One streak in the crowded camera: its axis is the pen's image line, and the left camera's
 /// four LEDs, met with that plane, are labelled at their exact positions. Without the streak's
-/// second moments (a round blob of unknown axis) there is no line and no labelling.
+/// second moments (a round blob of unknown axis), the planes about the blob's ray
+/// (`pipeline/pen_ray.rs`) find the same labelling: the blob's centroid lies on the pen's image,
+/// and the fit puts the LEDs where they are.
 #[test]
 fn a_streak_of_merged_spots_gives_the_pen_line() {
     let s = streak_scene();
-    let l = label(&s, &towards_tip(&s)).expect("a pen-line labelling");
-    assert_eq!(l.crowded, CameraId::Right);
-    for k in 0..LED_COUNT {
-        let led = l.leds[k].unwrap();
-        assert_eq!((led.clear_blob, led.crowded_blob), (k, 0), "LED {}", k + 1);
-        let err = (led.point - s.leds[k]).norm();
-        assert!(err < 1e-9, "LED {} off by {err} m", k + 1);
+    let round = {
+        let mut round = streak_scene();
+        round.align.set_shapes(1, Vec::new());
+        round
+    };
+    for scene in [&s, &round] {
+        let l = label(scene, &towards_tip(scene)).expect("a pen-line labelling");
+        assert_eq!(l.crowded, CameraId::Right);
+        for k in 0..LED_COUNT {
+            let led = l.leds[k].unwrap();
+            assert_eq!((led.clear_blob, led.crowded_blob), (k, 0), "LED {}", k + 1);
+            let err = (led.point - scene.leds[k]).norm();
+            assert!(err < 1e-9, "LED {} off by {err} m", k + 1);
+            assert!(led.covariance.is_some_and(|c| c.trace() > 0.0));
+        }
     }
-    let mut round = streak_scene();
-    round.align.set_shapes(1, Vec::new());
-    assert!(label(&round, &towards_tip(&round)).is_none());
 }
 
 /// The hand may hide an end LED from the crowded camera when the clear one sees it: LED 1
@@ -315,5 +322,114 @@ fn a_led_covered_by_a_streak_is_not_given_a_nearer_spot() {
         assert_eq!(led.crowded_blob, 1, "LED {} on the streak", k + 1);
         let err = (led.point - s.leds[k]).norm();
         assert!(err < 1e-9, "LED {} off by {err} m", k + 1);
+    }
+}
+
+/// The pen pointing within 1.5 degrees of the right camera: its four spots lie a few pixels
+/// apart there and merge into one round blob at their centroid (no usable axis), while the left
+/// camera sees LEDs 2-4 (LED 1 hidden by the hand). The planes about the blob's ray
+/// (`pipeline/pen_ray.rs`) label LEDs 2-4, and the fit puts them where they are.
+#[test]
+fn a_pen_pointing_at_a_camera_is_located_about_its_blobs_ray() {
+    let (rig, pen, _, _, _) = merged_spot_scene(T, 1);
+    let led1 = Vector3::new(0.125, 0.0, 0.9);
+    let to_camera = (Vector3::new(0.25, 0.0, 0.0) - led1).normalize();
+    let back = (to_camera + Vector3::y() * 1.5f64.to_radians().tan()).normalize();
+    let leds = pen.led_offsets.map(|l| led1 + back * l);
+    let right_px = right_pixels(&rig, &leds);
+    let n = LED_COUNT as f64;
+    let centre = right_px
+        .iter()
+        .fold([0.0, 0.0], |c, p| [c[0] + p[0] / n, c[1] + p[1] / n]);
+    let spread = right_px
+        .iter()
+        .map(|p| (p[0] - centre[0]).hypot(p[1] - centre[1]))
+        .fold(0.0, f64::max);
+    assert!(spread < 6.0, "{right_px:?}");
+    let left_px: Vec<[f64; 2]> = leds[1..]
+        .iter()
+        .map(|p| rig.project(CameraId::Left, p).unwrap())
+        .collect();
+    let left = CameraFrame {
+        radii: vec![3.0; 3],
+        ..CameraFrame::new(CameraId::Left, T, left_px)
+    };
+    let right = CameraFrame {
+        radii: vec![spread + 3.0],
+        ..CameraFrame::new(CameraId::Right, T, vec![centre])
+    };
+    let s = scene_of(rig, pen, leds, left, right);
+    let l = label(&s, &towards_tip(&s)).expect("a pen-line labelling");
+    assert_eq!(l.crowded, CameraId::Right);
+    assert!(l.leds[0].is_none());
+    for k in 1..LED_COUNT {
+        let led = l.leds[k].expect("LED seen by the left camera");
+        assert_eq!((led.clear_blob, led.crowded_blob), (k - 1, 0));
+        let err = (led.point - s.leds[k]).norm();
+        assert!(err < 1e-6, "LED {} off by {err} m", k + 1);
+    }
+}
+
+/// The fit's covariance is the pen's real uncertainty: with Gaussian noise on every spot (the
+/// tracker's pixel sigma; twice that on the merged streak's centroid, which the fit weighs at
+/// half), the LEDs' scatter over many trials matches the covariance the fit reports, once its
+/// inflation by the number of LEDs (for the tip's independence assumption) is taken out.
+#[test]
+fn the_pen_line_fit_reports_the_scatter_of_its_points() {
+    let (rig, pen, leds, clean_left, _) = merged_spot_scene(T, 1);
+    let sigma = TrackerConfig::default().correspondence.pixel_sigma;
+    let px = right_pixels(&rig, &leds);
+    let (a, b) = (px[0], px[LED_COUNT - 1]);
+    let centre = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+    let len2 = (b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2);
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    let mut gauss = move || {
+        // xorshift64 and Box-Muller: a fixed, dependency-free stream.
+        let mut uniform = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (u, v) = (uniform().max(1e-300), uniform());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    };
+    let trials = 400;
+    let (mut scatter, mut reported, mut labelled) = ([0.0; LED_COUNT], [0.0; LED_COUNT], 0);
+    for _ in 0..trials {
+        let mut left = clean_left.clone();
+        for p in &mut left.blobs {
+            p[0] += sigma * gauss();
+            p[1] += sigma * gauss();
+        }
+        let noisy = [
+            centre[0] + 2.0 * sigma * gauss(),
+            centre[1] + 2.0 * sigma * gauss(),
+        ];
+        let right = CameraFrame {
+            radii: vec![(len2.sqrt() * 0.5).max(3.0)],
+            shapes: vec![streak_shape(a, b, len2 / 12.0)],
+            ..CameraFrame::new(CameraId::Right, T, vec![noisy])
+        };
+        let s = scene_of(rig.clone(), pen, leds, left, right);
+        let Some(l) = label(&s, &towards_tip(&s)) else {
+            continue;
+        };
+        if l.leds.iter().any(Option::is_none) {
+            continue;
+        }
+        labelled += 1;
+        for (k, led) in l.leds.iter().flatten().enumerate() {
+            scatter[k] += (led.point - leds[k]).norm_squared();
+            reported[k] += led.covariance.unwrap().trace() / LED_COUNT as f64;
+        }
+    }
+    assert!(
+        labelled * 10 >= trials * 9,
+        "{labelled} of {trials} labelled"
+    );
+    for k in 0..LED_COUNT {
+        let ratio = scatter[k] / reported[k];
+        assert!((0.75..1.25).contains(&ratio), "LED {}: {ratio}", k + 1);
     }
 }
