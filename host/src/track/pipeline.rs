@@ -351,8 +351,6 @@ impl Tracker {
             left,
             right,
         );
-        self.widen_for_extrapolation();
-        let (left, right) = (&self.points.left_norm, &self.points.right_norm);
         let cands = &self.correspondences.candidates;
         let stale = direction_sigma.is_some_and(|s| s > self.config.identify.prior_sigma);
         // Identification.
@@ -435,6 +433,13 @@ impl Tracker {
         {
             self.remember_labels(this, t, id, &vision);
             return self.refused(t, Refusal::NoWorld);
+        }
+        // The labelled pen's uncertainty, not the identification's gates (which keep the
+        // pixel noise's: a wider band would let a mismatched labelling pass), includes the
+        // error of moving the other camera's blobs to the pair's time. A pen-line fit has
+        // included it already.
+        if !id.from_pen_line {
+            self.widen_for_extrapolation();
         }
         let cands = &self.correspondences.candidates;
         if !id.from_pen_line {

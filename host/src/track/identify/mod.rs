@@ -66,6 +66,10 @@ pub struct Identification {
     /// (the tracker's pen-line stereo): that camera's blob of an LED may be a merge covering it, so
     /// the checks that read an LED's own image there (merges, clock offset) leave it out.
     pub from_pen_line: bool,
+    /// The camera about one of whose compact blobs' rays the pen-line labelling was found (the
+    /// pen pointing at it): the spots there lie pixels apart, so no LED's image in it is vouched
+    /// for, neither in the output's labels nor in those that give the next frames' velocities.
+    pub from_pen_ray: Option<crate::stereo::CameraId>,
 }
 
 impl Identification {
@@ -313,6 +317,7 @@ impl Identifier {
             interference,
             completed: 0,
             from_pen_line: false,
+            from_pen_ray: None,
         }
     }
 }

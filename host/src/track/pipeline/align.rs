@@ -102,6 +102,9 @@ pub(super) struct AlignOptions {
     pub(super) max_blob_motion_px: f64,
     /// Rolling-shutter delay of one row, per camera, nanoseconds ([`TrackerConfig::row_time_ns`]).
     pub(super) row_time_ns: [f64; 2],
+    /// A blob centre's noise, pixels: the floor under which a measured image acceleration is
+    /// noise, not motion.
+    pub(super) pixel_sigma: f64,
 }
 
 impl AlignOptions {
@@ -112,6 +115,7 @@ impl AlignOptions {
             continuity_ns: config.continuity_ns,
             max_blob_motion_px: config.max_blob_motion_px,
             row_time_ns: config.row_time_ns,
+            pixel_sigma: config.correspondence.pixel_sigma,
         }
     }
 }
@@ -347,7 +351,12 @@ impl TimeAlignment {
                         (v[0] - v0[0]) / (0.5 * (dt + dt0)),
                         (v[1] - v0[1]) / (0.5 * (dt + dt0)),
                     ];
-                    error_px = extrapolation_error(a[0].hypot(a[1]), dt, own_shift);
+                    // Three noisy centres give an acceleration of standard deviation about
+                    // √6 σ / (dt dt0) per axis even at rest: only what exceeds twice that is
+                    // motion.
+                    let floor = 2.0 * 6f64.sqrt() * self.options.pixel_sigma / (dt * dt0);
+                    let accel = (a[0].hypot(a[1]) - floor).max(0.0);
+                    error_px = extrapolation_error(accel, dt, own_shift);
                 }
                 Some(v)
             });
@@ -550,6 +559,7 @@ mod tests {
         continuity_ns: 100_000_000,
         max_blob_motion_px: 40.0,
         row_time_ns: [0.0; 2],
+        pixel_sigma: 0.0,
     };
 
     fn rig() -> StereoRig {
@@ -711,8 +721,8 @@ mod tests {
 
     /// Blobs accelerating uniformly: the move at the velocity measured over the last frame
     /// interval misses the true position by exactly the predicted `a s (dt + s) / 2`, for a move
-    /// forwards in time and for one backwards into that interval; at constant velocity (the frame
-    /// before moving on the same line) the predicted error is zero.
+    /// forwards in time and for one backwards into that interval; at constant velocity the
+    /// predicted error is zero, and stays zero when the centres' noise fakes an acceleration.
     #[test]
     fn a_moves_error_is_predicted_from_the_image_acceleration() {
         let rig = rig();
@@ -772,6 +782,28 @@ mod tests {
             .alignment(&rig, 1, 55_000_000)
             .iter()
             .all(|m| m.error_px < 1e-9));
+        // Centres jittered by half the pixel noise at constant velocity: an acceleration below
+        // the noise floor predicts no error.
+        let sigma = 0.5;
+        let mut c = TimeAlignment::new(AlignOptions {
+            pixel_sigma: sigma,
+            ..OPTIONS
+        });
+        for (k, t) in [10_000_000u64, 26_000_000, 43_000_000]
+            .into_iter()
+            .enumerate()
+        {
+            let jitter = if k == 1 { -0.5 * sigma } else { 0.5 * sigma };
+            let blobs = uniform(t)
+                .iter()
+                .map(|p| [p[0] + jitter, p[1] - jitter])
+                .collect();
+            c.push(1, t, blobs, Vec::new());
+            c.label(1, labels, [None; LED_COUNT]);
+        }
+        let moved = c.alignment(&rig, 1, 55_000_000);
+        assert_eq!(moved.len(), 3);
+        assert!(moved.iter().all(|m| m.error_px == 0.0));
     }
 
     /// With a rolling shutter every blob was exposed at its own row's time: the frame's time is its

@@ -206,6 +206,7 @@ mod tests {
             interference: 0,
             completed: 0,
             from_pen_line: false,
+            from_pen_ray: None,
         };
         c.observe(
             &rig,

@@ -134,6 +134,7 @@ pub(super) fn complete_merged(
         interference,
         completed,
         from_pen_line: false,
+        from_pen_ray: None,
     })
 }
 

@@ -15,6 +15,10 @@
 //!   offset that is a parameter, bounded by the covered LEDs' offsets (their brightnesses are
 //!   unknown), and its centroid is given half a spot's weight.
 //!
+//! A labelling found about a compact blob's ray (`pipeline/pen_ray.rs`) does not know which LED
+//! each crowded blob images: every crowded blob is then a point of the pen at a free offset
+//! between its end LEDs'.
+//!
 //! Each spot's standard deviation is the tracker's pixel noise, widened for a blob moved to the
 //! pair's time by the error its image acceleration predicts ([`super::align::extrapolation_error`]).
 //! The unknowns are the pen's point at offset zero, its direction (two angles) and the merged
@@ -113,7 +117,24 @@ pub(super) fn fit_pen_line(
             .collect();
         let target = *normals(pair, crowded).get(led.crowded_blob)?;
         let scale = focal(crowded) / sigma(crowded, led.crowded_blob);
-        if covering.len() == 1 {
+        if l.from_ray {
+            // About a ray, which LED a crowded blob images is not known (they lie pixels apart):
+            // each blob is somewhere on the pen between its end LEDs.
+            if covering[0] == k {
+                spots.push(Spot {
+                    camera: crowded,
+                    target,
+                    scale: scale * MERGED_WEIGHT,
+                    at: Offset::Merged(merged.len()),
+                });
+                let (lo, hi) = offsets
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &o| {
+                        (a.min(o), b.max(o))
+                    });
+                merged.push((led.crowded_blob, lo, hi));
+            }
+        } else if covering.len() == 1 {
             spots.push(Spot {
                 camera: crowded,
                 target,

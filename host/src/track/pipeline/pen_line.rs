@@ -90,6 +90,8 @@ pub(super) struct LineLabelling {
     pub(super) leds: [Option<LineLed>; LED_COUNT],
     /// RMS mismatch of the LEDs' positions along the pen from its spacing, metres.
     pub(super) mismatch: f64,
+    /// Found about a compact blob's ray (`pipeline/pen_ray.rs`), not on a measured pen plane.
+    pub(super) from_ray: bool,
 }
 
 /// One LED of a [`LineLabelling`].
@@ -154,6 +156,11 @@ impl Tracker {
         }
         let count = points.iter().flatten().count();
         let fit = (-(found.mismatch / options.tolerance).powi(2)).exp();
+        // A pen imaged as one blob labels it for every LED (a merge, as a plane's labelling
+        // does); about a ray among several blobs the LEDs may sit one blob off.
+        let mut crowded_blobs = found.leds.iter().flatten().map(|l| l.crowded_blob);
+        let first_blob = crowded_blobs.next();
+        let one_blob = crowded_blobs.all(|b| Some(b) == first_blob);
         Some(Identification {
             assignment,
             points,
@@ -163,6 +170,7 @@ impl Tracker {
             interference: 0,
             completed: 0,
             from_pen_line: true,
+            from_pen_ray: (found.from_ray && !one_blob).then_some(found.crowded),
         })
     }
 }
@@ -202,11 +210,9 @@ pub(super) fn label_pen_line(
         for set_k in &sets_k {
             let mut all = Vec::new();
             for plane_c in &planes_c {
-                let ls = labellings(pair, options, crowded, plane_c, set_k, direction);
-                all.extend(
-                    ls.into_iter()
-                        .filter_map(|l| fit_pen_line(pair, options, l)),
-                );
+                all.extend(labellings(
+                    pair, options, crowded, plane_c, set_k, direction,
+                ));
             }
             for n in (0..norm_c.len()).filter(|&n| streaks[n].is_none()) {
                 all.extend(ray_labellings(pair, options, crowded, n, *set_k, direction).ok()?);
@@ -220,7 +226,9 @@ pub(super) fn label_pen_line(
             }
         }
     }
-    found
+    // Only the unique labelling is fitted: a rival that the fit would reject still makes the
+    // pair ambiguous.
+    fit_pen_line(pair, options, found?)
 }
 
 pub(super) fn other(camera: CameraId) -> CameraId {
@@ -469,6 +477,7 @@ pub(super) fn labellings(
                 crowded,
                 leds,
                 mismatch,
+                from_ray: false,
             });
         }
     }
@@ -621,6 +630,6 @@ pub(super) fn own_images(
     };
     std::array::from_fn(|k| {
         let merged = id.from_pen_line && (shared(k, |p| p.0) || shared(k, |p| p.1));
-        pairs[k].filter(|_| !merged)
+        pairs[k].filter(|_| !merged && id.from_pen_ray.is_none())
     })
 }

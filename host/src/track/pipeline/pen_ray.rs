@@ -1,5 +1,5 @@
 //! Pen-ray planes: the crowded camera's pen plane when the pen points almost straight at that
-//! camera, so that all its LED spots merge into one compact blob with no usable axis.
+//! camera, so that the LED spots it shows merge into one compact blob with no usable axis.
 //!
 //! [`super::pen_line`] needs the pen's image line in the crowded camera: through two or more
 //! blobs, or along one streak's principal axis. When the pen points within a few degrees of the
@@ -24,7 +24,6 @@
 //! covariance says how well this geometry fixes them (webcam seed 3, the last stroke: the plane
 //! alone left the tip 1-8 mm off where the fit leaves it 0.3-1.8 mm, and says so).
 
-use super::pen_fit::fit_pen_line;
 use super::pen_line::{labellings, normals, ray, same_labels, LineLabelling, LineOptions};
 use super::safety::PairView;
 use crate::stereo::CameraId;
@@ -57,9 +56,16 @@ pub(super) fn ray_labellings(
     // Two unit vectors across the ray: plane normals are their combinations.
     let (a, b) = across(&axis);
     let step = std::f64::consts::PI / SCAN_STEPS as f64;
+    // The free plane may shift the LEDs by one along the crowded image and still cover them
+    // with blobs a few pixels apart (fires-v1 seed 3): the labelling marks itself so, and its
+    // LEDs' images are not taken for labels.
     let at = |theta: f64| -> Vec<LineLabelling> {
         let normal = a * theta.cos() + b * theta.sin();
-        labellings(pair, options, crowded, &(normal, origin), &set_k, direction)
+        let mut ls = labellings(pair, options, crowded, &(normal, origin), &set_k, direction);
+        for l in &mut ls {
+            l.from_ray = true;
+        }
+        ls
     };
     // Per distinct labelling: the scan steps that accept it.
     let mut found: Vec<(LineLabelling, Vec<usize>)> = Vec::new();
@@ -84,7 +90,7 @@ pub(super) fn ray_labellings(
                 _ => best = Some(l),
             }
         }
-        out.extend(best.and_then(|l| fit_pen_line(pair, options, l)));
+        out.extend(best);
     }
     Ok(out)
 }

@@ -391,6 +391,7 @@ mod tests {
             interference: 0,
             completed: 0,
             from_pen_line: false,
+            from_pen_ray: None,
         };
         let s = [l[0], l[2], l[3]];
         let mean = s.iter().sum::<f64>() / 3.0;

@@ -288,7 +288,12 @@ impl LabelGuard {
                 })
             })
         };
-        align.label(this, side(this == 0), side(this != 0));
+        // A pen-ray labelling's crowded camera has no LED images of its own.
+        let labels = |left: bool| match id.from_pen_ray {
+            Some(c) if (c == CameraId::Left) == left => [None; LED_COUNT],
+            _ => side(left),
+        };
+        align.label(this, labels(this == 0), labels(this != 0));
     }
 }
 
@@ -323,6 +328,7 @@ mod tests {
             interference: 0,
             completed: 0,
             from_pen_line: false,
+            from_pen_ray: None,
         }
     }
 
@@ -344,6 +350,7 @@ mod tests {
                 continuity_ns: 100_000_000,
                 max_blob_motion_px: 40.0,
                 row_time_ns: [0.0; 2],
+                pixel_sigma: 0.0,
             });
             for (cam, camera) in [CameraId::Left, CameraId::Right].into_iter().enumerate() {
                 let blobs = leds
