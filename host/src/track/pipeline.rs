@@ -566,25 +566,20 @@ impl Tracker {
     /// less than one completed just after it, and its tip's uncertainty says so.
     fn widen_for_extrapolation(&mut self) {
         let sigma = self.config.correspondence.pixel_sigma;
-        let other = 1 - self.points.this;
         if sigma <= 0.0 {
             return;
         }
         let focal = [self.rig.left.focal_px(), self.rig.right.focal_px()];
         let (left, right) = (&self.points.left_norm, &self.points.right_norm);
         for cand in &mut self.correspondences.candidates {
-            let blob = if other == 0 { cand.left } else { cand.right };
-            let error = self
-                .points
-                .aligned_error_px
-                .get(blob)
-                .copied()
-                .unwrap_or(0.0);
-            if error <= 0.0 {
+            let error = [
+                self.points.move_error_px(CameraId::Left, cand.left),
+                self.points.move_error_px(CameraId::Right, cand.right),
+            ];
+            if error == [0.0; 2] {
                 continue;
             }
-            let mut px = [sigma; 2];
-            px[other] = sigma.hypot(error);
+            let px = [sigma.hypot(error[0]), sigma.hypot(error[1])];
             let (Some(&ml), Some(&mr)) = (left.get(cand.left), right.get(cand.right)) else {
                 continue;
             };

@@ -144,6 +144,18 @@ pub(super) struct PairPoints {
 }
 
 impl PairPoints {
+    /// The predicted error of moving blob `blob` of `camera` to the pair's time, pixels: 0 for
+    /// the camera that completed the pair (its blobs move by rows' delays only) and for blobs
+    /// not moved.
+    pub(super) fn move_error_px(&self, camera: CameraId, blob: usize) -> f64 {
+        let cam = usize::from(camera == CameraId::Right);
+        if cam == self.this {
+            0.0
+        } else {
+            self.aligned_error_px.get(blob).copied().unwrap_or(0.0)
+        }
+    }
+
     /// The pixel blobs of `camera` as the pair uses them: the newest frame's own blobs (moved from
     /// their rows' times with a rolling shutter) for the camera that completed the pair, the
     /// aligned blobs for the other one.
@@ -367,7 +379,7 @@ impl TimeAlignment {
                 }
                 let (a, c) = (project(at_frame, k)?, project(at_target, k)?);
                 let v = [(c[0] - a[0]) / step, (c[1] - a[1]) / step];
-                error_px = UNMEASURED_MOVE_ERROR * v[0].hypot(v[1]) * own_shift.abs();
+                error_px = unmeasured_move_error(v, own_shift);
                 Some(v)
             });
             if let Some(v) = v {
@@ -398,7 +410,7 @@ impl TimeAlignment {
                         blob: i,
                         moved: [b[0] + v[0] * own_shift, b[1] + v[1] * own_shift],
                         velocity: v,
-                        error_px: UNMEASURED_MOVE_ERROR * v[0].hypot(v[1]) * own_shift.abs(),
+                        error_px: unmeasured_move_error(v, own_shift),
                     });
                 }
             }
@@ -523,11 +535,14 @@ pub(super) fn extrapolation_error(accel: f64, dt: f64, shift: f64) -> f64 {
     (0.5 * accel * shift * (dt + shift)).abs()
 }
 
-/// The error of a move whose velocity no LED's own blobs measured, as a fraction of the move: a
-/// velocity predicted from the pen's last poses, or that of blobs matched by their order along
-/// the pen (a merged blob, whose centroid moves as its spots merge and part), can be wrong by
-/// as much as the motion itself under a turn; half the move is the middle of that range.
-const UNMEASURED_MOVE_ERROR: f64 = 0.5;
+/// The error of moving a blob by `shift` (ns) at velocity `v` (px/ns) that no LED's own blobs
+/// measured, pixels: a velocity predicted from the pen's last poses, or that of blobs matched
+/// by their order along the pen (a merged blob, whose centroid moves as its spots merge and
+/// part), can be wrong by as much as the motion itself under a turn; half the move is the
+/// middle of that range.
+fn unmeasured_move_error(v: [f64; 2], shift: f64) -> f64 {
+    0.5 * v[0].hypot(v[1]) * shift.abs()
+}
 
 /// The shortest time between the two vision poses whose difference predicts the pen's motion,
 /// nanoseconds: a quarter of a 60 Hz frame, so that a millimetre of triangulation noise makes at

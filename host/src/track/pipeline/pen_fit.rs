@@ -86,22 +86,15 @@ pub(super) fn fit_pen_line(
         .sum::<Vector3<f64>>()
         / seen.len() as f64;
     let sigma = |camera: CameraId, blob: usize| -> f64 {
-        let cam = usize::from(camera == CameraId::Right);
-        let moved = if cam == pair.points.this {
-            0.0
-        } else {
-            pair.points
-                .aligned_error_px
-                .get(blob)
-                .copied()
-                .unwrap_or(0.0)
-        };
-        options.pixel_sigma.max(1e-3).hypot(moved)
+        options
+            .pixel_sigma
+            .max(1e-3)
+            .hypot(pair.points.move_error_px(camera, blob))
     };
     let focal = |camera: CameraId| pair.rig.camera(camera).focal_px();
     let mut spots = Vec::new();
-    // Merged blobs: (blob, lowest offset, highest offset).
-    let mut merged: Vec<(usize, f64, f64)> = Vec::new();
+    // Merged blobs' offset bounds: (lowest, highest).
+    let mut merged: Vec<(f64, f64)> = Vec::new();
     for &(k, _) in &seen {
         let led = l.leds[k]?;
         spots.push(Spot {
@@ -117,54 +110,43 @@ pub(super) fn fit_pen_line(
             .collect();
         let target = *normals(pair, crowded).get(led.crowded_blob)?;
         let scale = focal(crowded) / sigma(crowded, led.crowded_blob);
-        if l.from_ray {
-            // About a ray, which LED a crowded blob images is not known (they lie pixels apart):
-            // each blob is somewhere on the pen between its end LEDs.
-            if covering[0] == k {
-                spots.push(Spot {
-                    camera: crowded,
-                    target,
-                    scale: scale * MERGED_WEIGHT,
-                    at: Offset::Merged(merged.len()),
-                });
-                let (lo, hi) = offsets
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &o| {
-                        (a.min(o), b.max(o))
-                    });
-                merged.push((led.crowded_blob, lo, hi));
-            }
-        } else if covering.len() == 1 {
+        if covering[0] != k {
+            continue;
+        }
+        if covering.len() == 1 && !l.from_ray {
             spots.push(Spot {
                 camera: crowded,
                 target,
                 scale,
                 at: Offset::Led(offsets[k]),
             });
-        } else if covering[0] == k {
-            // The blob may also cover neighbours that the clear camera does not see.
-            let mut first = covering[0];
-            while first > 0 && l.leds[first - 1].is_none() {
-                first -= 1;
-            }
-            let mut last = covering[covering.len() - 1];
-            while last + 1 < LED_COUNT && l.leds[last + 1].is_none() {
-                last += 1;
-            }
-            let (lo, hi) = (
-                offsets[first].min(offsets[last]),
-                offsets[first].max(offsets[last]),
-            );
-            spots.push(Spot {
-                camera: crowded,
-                target,
-                scale: scale * MERGED_WEIGHT,
-                at: Offset::Merged(merged.len()),
-            });
-            merged.push((led.crowded_blob, lo, hi));
+            continue;
         }
+        // The LEDs the blob may image, by index: about a ray, which LED a crowded blob images is
+        // not known (they lie pixels apart), so any of them; otherwise those it covers and the
+        // neighbours beyond them that the clear camera does not see.
+        let (mut first, mut last) = (covering[0], covering[covering.len() - 1]);
+        if l.from_ray {
+            (first, last) = (0, LED_COUNT - 1);
+        }
+        while first > 0 && l.leds[first - 1].is_none() {
+            first -= 1;
+        }
+        while last + 1 < LED_COUNT && l.leds[last + 1].is_none() {
+            last += 1;
+        }
+        spots.push(Spot {
+            camera: crowded,
+            target,
+            scale: scale * MERGED_WEIGHT,
+            at: Offset::Merged(merged.len()),
+        });
+        merged.push((
+            offsets[first].min(offsets[last]),
+            offsets[first].max(offsets[last]),
+        ));
     }
-    let mut extra: Vec<f64> = merged.iter().map(|m| 0.5 * (m.1 + m.2)).collect();
+    let mut extra: Vec<f64> = merged.iter().map(|m| 0.5 * (m.0 + m.1)).collect();
     let n_params = 5 + extra.len();
     let rows = 2 * spots.len();
     if rows <= n_params {
@@ -200,7 +182,7 @@ pub(super) fn fit_pen_line(
             .iter()
             .zip(&merged)
             .enumerate()
-            .map(|(m, (v, &(_, lo, hi)))| (v + d[5 + m]).clamp(lo, hi))
+            .map(|(m, (v, &(lo, hi)))| (v + d[5 + m]).clamp(lo, hi))
             .collect();
         (o, dir, x)
     };
@@ -210,7 +192,7 @@ pub(super) fn fit_pen_line(
         for c in 0..n_params {
             let mut d = vec![0.0; n_params];
             // Offsets at their bound are perturbed inwards.
-            d[c] = if c >= 5 && extra[c - 5] + h > merged[c - 5].2 {
+            d[c] = if c >= 5 && extra[c - 5] + h > merged[c - 5].1 {
                 -h
             } else {
                 h
