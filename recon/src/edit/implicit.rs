@@ -28,6 +28,8 @@
 use faer::Mat;
 use nalgebra::Matrix3;
 
+use super::basis::{AffineBasis, AFFINE_PARAMETERS};
+use super::implicit_fit::{coherence_rows, fit, stencil_condition};
 use super::local::{cotan_stiffness, cotan_weights_at, from_mat, gather};
 use super::problem::{EditProblem, Role};
 use super::session::EditMethod;
@@ -51,6 +53,10 @@ pub struct ImplicitOptions {
     pub second_solve: bool,
     /// Keep the fitted scale in the second solve (Eq. 2.11) instead of only the rotation.
     pub scale_features: bool,
+    /// Precompute the first system's response to every handle's affine parameters when
+    /// factoring ([`AffineBasis`]), so a drag costs vector updates instead of a solve
+    /// (transform handles only; a one-shot edit turns it off).
+    pub drag_basis: bool,
 }
 
 impl Default for ImplicitOptions {
@@ -60,6 +66,7 @@ impl Default for ImplicitOptions {
             s_disp: 0.2,
             second_solve: true,
             scale_features: false,
+            drag_basis: true,
         }
     }
 }
@@ -73,6 +80,10 @@ pub struct ImplicitEditor {
     first_ms: f64,
     /// Time to build and factor the second system (Eq. 2.10), ms.
     second_ms: f64,
+    /// The first system's drag basis, if precomputed.
+    basis: Option<AffineBasis>,
+    /// Time to precompute it, ms.
+    basis_ms: f64,
     /// Positions after the degenerate-vertex displacement.
     displaced: Vec<Vec3>,
     /// Stencil (vertex then 1-ring) and `Qᵢ` ((k+1) × 3, row-major) per ROI vertex.
@@ -89,178 +100,6 @@ pub struct ImplicitEditor {
     mu: f64,
     options: ImplicitOptions,
     last_first: Option<Vec<Vec3>>,
-}
-
-/// The smallest and largest eigenvalue of a symmetric 3×3 matrix, in closed form (the
-/// trigonometric solution of the characteristic cubic; O. K. Smith, *Eigenvalues of a
-/// symmetric 3 × 3 matrix*, CACM 1961). Absolute error about ε·‖A‖, so a condition
-/// number up to [`DEGENERATE_COND`] is read to about 1e-10 relative.
-fn eigen_extremes(a: &Matrix3<f64>) -> (f64, f64) {
-    let off = a[(0, 1)].powi(2) + a[(0, 2)].powi(2) + a[(1, 2)].powi(2);
-    let q = (a[(0, 0)] + a[(1, 1)] + a[(2, 2)]) / 3.0;
-    let d = [a[(0, 0)] - q, a[(1, 1)] - q, a[(2, 2)] - q];
-    let p2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + 2.0 * off;
-    if p2 <= 0.0 || !p2.is_finite() {
-        return (q, q);
-    }
-    let p = (p2 / 6.0).sqrt();
-    let b = (a - Matrix3::identity() * q) / p;
-    let r = (b.determinant() / 2.0).clamp(-1.0, 1.0);
-    let phi = r.acos() / 3.0;
-    let hi = q + 2.0 * p * phi.cos();
-    let lo = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
-    (lo, hi)
-}
-
-/// The stencil of vertex `i` about its ring's centroid (`V`'s columns) and `V Vᵀ`;
-/// `None` for a vertex without neighbours.
-fn centred_stencil(
-    x: &[Vec3],
-    stencil: &[usize],
-) -> Option<(Vec<nalgebra::Vector3<f64>>, Matrix3<f64>)> {
-    let k = stencil.len() - 1;
-    if k == 0 {
-        return None;
-    }
-    let c0 = stencil[1..].iter().fold(Vec3::ZERO, |a, &j| a + x[j]) / k as f64;
-    let v: Vec<nalgebra::Vector3<f64>> = stencil.iter().map(|&s| to_na(x[s] - c0)).collect();
-    let vvt: Matrix3<f64> = v.iter().map(|d| d * d.transpose()).sum();
-    Some((v, vvt))
-}
-
-/// `cond(V Vᵀ)` from its extreme eigenvalues (infinite when singular).
-fn condition(vvt: &Matrix3<f64>) -> f64 {
-    let (lo, hi) = eigen_extremes(vvt);
-    if lo > 0.0 {
-        hi / lo
-    } else {
-        f64::INFINITY
-    }
-}
-
-/// `cond(V Vᵀ)` of vertex `i` for positions `x`, without fitting `Qᵢ`: the degenerate-vertex test.
-fn stencil_condition(x: &[Vec3], stencil: &[usize]) -> f64 {
-    centred_stencil(x, stencil).map_or(f64::INFINITY, |(_, vvt)| condition(&vvt))
-}
-
-/// `cond(V Vᵀ)` and `Qᵢ` of vertex `i` for positions `x`.
-fn fit(x: &[Vec3], stencil: &[usize]) -> (f64, Option<Vec<[f64; 3]>>) {
-    let Some((v, vvt)) = centred_stencil(x, stencil) else {
-        return (f64::INFINITY, None);
-    };
-    let k = stencil.len() - 1;
-    let cond = condition(&vvt);
-    let Some(inv) = vvt.try_inverse() else {
-        return (cond, None);
-    };
-    // P = Vᵀ (V Vᵀ)⁻¹, Q = P − a (1ᵀ P) with a = (0, 1/k, …, 1/k).
-    let p: Vec<[f64; 3]> = v
-        .iter()
-        .map(|d| {
-            let row = inv * d;
-            [row[0], row[1], row[2]]
-        })
-        .collect();
-    let mut sum = [0.0; 3];
-    for row in &p {
-        for c in 0..3 {
-            sum[c] += row[c];
-        }
-    }
-    let q = p
-        .iter()
-        .enumerate()
-        .map(|(m, row)| {
-            let a = if m == 0 { 0.0 } else { 1.0 / k as f64 };
-            [
-                row[0] - a * sum[0],
-                row[1] - a * sum[1],
-                row[2] - a * sum[2],
-            ]
-        })
-        .collect();
-    (cond, Some(q))
-}
-
-/// `Qmᵀ (L ⊗ I₃)` (its column `3i + c` is row `3i + c` of `(L ⊗ I₃) Qm`), with `L` the graph Laplacian of the 2-ring pairs: row
-/// `3i + c` is `Σ_k (Qᵢ[:, c] − Q_k[:, c])` over the ROI vertices `k` within two rings of
-/// `i`, each `Qᵢ` spread over its stencil (zero where the gradient is fixed). Summed in one
-/// dense accumulator per vertex, which is what makes the coherence term cheap to assemble.
-fn coherence_rows(
-    problem: &EditProblem,
-    stencil: &[Vec<usize>],
-    q: &[Vec<[f64; 3]>],
-    fixed_grad: impl Fn(usize) -> bool,
-) -> Result<crate::solve::SparseMatrix, EditError> {
-    let n_roi = problem.n_roi;
-    let n = problem.len();
-    let mut mark = vec![usize::MAX; n_roi];
-    let mut partners: Vec<Vec<usize>> = vec![Vec::new(); n_roi];
-    for i in 0..n_roi {
-        mark[i] = i;
-        for &j in &problem.neighbors[i] {
-            for &k in std::iter::once(&j).chain(problem.neighbors[j].iter()) {
-                if k < n_roi && mark[k] != i {
-                    mark[k] = i;
-                    if k > i {
-                        partners[i].push(k);
-                        partners[k].push(i);
-                    }
-                }
-            }
-        }
-    }
-    // Each free gradient's stencil and Qᵢ rows side by side, in one array.
-    let mut ptr = Vec::with_capacity(n_roi + 1);
-    let mut flat: Vec<(usize, [f64; 3])> = Vec::new();
-    ptr.push(0);
-    for i in 0..n_roi {
-        if !fixed_grad(i) {
-            flat.extend(stencil[i].iter().copied().zip(q[i].iter().copied()));
-        }
-        ptr.push(flat.len());
-    }
-    let mut acc = vec![[0.0; 3]; n];
-    let mut seen = vec![usize::MAX; n];
-    let mut touched = Vec::new();
-    // Room for every row: a vertex's stencils overlap, so this bounds the entries.
-    let bound: usize = (0..n_roi)
-        .map(|i| {
-            let own = ptr[i + 1] - ptr[i];
-            own + partners[i]
-                .iter()
-                .map(|&k| ptr[k + 1] - ptr[k])
-                .sum::<usize>()
-        })
-        .sum();
-    let mut rows = RowBuilder::with_capacity(n, 3 * n_roi, 3 * bound.min(n * n_roi));
-    let mut entries = Vec::new();
-    for (i, partners_i) in partners.iter().enumerate() {
-        touched.clear();
-        let mut add = |k: usize, f: f64| {
-            for &(s, qk) in &flat[ptr[k]..ptr[k + 1]] {
-                if seen[s] != i {
-                    seen[s] = i;
-                    acc[s] = [0.0; 3];
-                    touched.push(s);
-                }
-                for (a, q) in acc[s].iter_mut().zip(qk) {
-                    *a += f * q;
-                }
-            }
-        };
-        add(i, partners_i.len() as f64);
-        for &k in partners_i {
-            add(k, -1.0);
-        }
-        touched.sort_unstable();
-        for c in [0, 1, 2] {
-            entries.clear();
-            entries.extend(touched.iter().map(|&s| (s, acc[s][c])));
-            rows.push(&entries)?;
-        }
-    }
-    Ok(rows.finish_transposed())
 }
 
 /// Area-weighted vertex normals of the local faces.
@@ -317,13 +156,43 @@ impl ImplicitEditor {
     }
 
     /// The first system (Eq. 2.8) with degenerate vertices pulled back: the positions shown
-    /// while a handle is dragged.
+    /// while a handle is dragged. With a drag basis ([`ImplicitOptions::drag_basis`]) this is
+    /// 12 vector updates per handle, otherwise one solve.
     pub fn solve_drag(
         &mut self,
         problem: &EditProblem,
         transforms: &[Similarity],
     ) -> Result<Vec<Vec3>, EditError> {
         problem.check_transforms(transforms)?;
+        let xd = match &self.basis {
+            Some(basis) => basis.combine(problem, transforms)?,
+            None => self.first_solution(problem, transforms)?,
+        };
+        let mut out = xd.clone();
+        for l in 0..problem.len() {
+            match problem.role[l] {
+                Role::Free => {
+                    let off = problem.rest[l] - self.displaced[l];
+                    if off != Vec3::ZERO {
+                        out[l] = xd[l] + mat_vec(&self.gradient_of(l, &xd), off);
+                    }
+                }
+                Role::Handle(h) => {
+                    out[l] = problem.handle_target(l, h, problem.rest[l], transforms)
+                }
+                _ => out[l] = problem.rest[l],
+            }
+        }
+        self.last_first = Some(xd);
+        Ok(out)
+    }
+
+    /// The first system's solution on the displaced geometry, by one solve.
+    fn first_solution(
+        &self,
+        problem: &EditProblem,
+        transforms: &[Similarity],
+    ) -> Result<Vec<Vec3>, EditError> {
         let n_roi = problem.n_roi;
         // Targets on the displaced geometry.
         let targets: Vec<Vec3> = (0..problem.len())
@@ -352,24 +221,78 @@ impl ImplicitEditor {
         let x = self
             .first
             .solve(&[Some(b_l.as_ref()), Some(m_c.as_ref())], known.as_ref())?;
-        let xd = from_mat(x.as_ref());
-        let mut out = xd.clone();
-        for l in 0..problem.len() {
-            match problem.role[l] {
-                Role::Free => {
-                    let off = problem.rest[l] - self.displaced[l];
-                    if off != Vec3::ZERO {
-                        out[l] = xd[l] + mat_vec(&self.gradient_of(l, &xd), off);
-                    }
+        Ok(from_mat(x.as_ref()))
+    }
+
+    /// Precomputes the first system's response to the 12 affine parameters of every handle
+    /// (see [`AffineBasis`]) by one solve with 12 right-hand sides per handle; afterwards
+    /// [`Self::solve_drag`] uses it. Parameter `(A − I)_{ab}` or `τ_a` moves only column
+    /// `a` of the targets, of the fixed gradients' `w δᵢ` and of `−w`. Fails for handles
+    /// given by positions.
+    pub fn precompute_drag_basis(&mut self, problem: &EditProblem) -> Result<(), EditError> {
+        let clock = std::time::Instant::now();
+        let basis = self.drag_basis(problem)?;
+        self.basis = Some(basis);
+        self.basis_ms = ms_since(clock);
+        Ok(())
+    }
+
+    /// Time [`Self::precompute_drag_basis`] took, ms (0 without a basis).
+    pub fn drag_basis_ms(&self) -> f64 {
+        self.basis_ms
+    }
+
+    fn drag_basis(&self, problem: &EditProblem) -> Result<AffineBasis, EditError> {
+        AffineBasis::check_handles(problem)?;
+        let n_roi = problem.n_roi;
+        let identity = vec![Similarity::identity(); problem.handles.len()];
+        let base = self.first_solution(problem, &identity)?;
+        let cols = AFFINE_PARAMETERS * problem.handles.len();
+        let col = |h: usize, k: usize| AFFINE_PARAMETERS * h + k;
+        let known = self.first.known();
+        let mut dk = Mat::<f64>::zeros(known.len(), cols);
+        for (r, &l) in known.iter().enumerate() {
+            if let Role::Handle(h) = problem.role[l] {
+                let p = problem.handle_target(l, h, self.displaced[l], &identity);
+                for k in 0..AFFINE_PARAMETERS {
+                    let a = if k < 9 { k / 3 } else { k - 9 };
+                    dk[(r, col(h, k))] = AffineBasis::target_delta(k, p)[a];
                 }
-                Role::Handle(h) => {
-                    out[l] = problem.handle_target(l, h, problem.rest[l], transforms)
-                }
-                _ => out[l] = problem.rest[l],
             }
         }
-        self.last_first = Some(xd);
-        Ok(out)
+        let mut b_l = Mat::<f64>::zeros(n_roi, cols);
+        let mut m_c = Mat::<f64>::zeros(3 * n_roi, cols);
+        for i in 0..n_roi {
+            if let Role::Handle(h) = problem.role[i] {
+                if problem.handles[h].fix_gradient {
+                    for k in 0..9 {
+                        let b = k % 3;
+                        b_l[(i, col(h, k))] = self.delta[i][b];
+                        m_c[(3 * i + b, col(h, k))] = -1.0;
+                    }
+                }
+            }
+        }
+        let x = self
+            .first
+            .solve_response(&[Some(b_l.as_ref()), Some(m_c.as_ref())], dk.as_ref())?;
+        let responses = (0..problem.handles.len())
+            .map(|h| {
+                (0..AFFINE_PARAMETERS)
+                    .map(|k| {
+                        let a = if k < 9 { k / 3 } else { k - 9 };
+                        (0..problem.len())
+                            .map(|l| {
+                                let mut v = [0.0; 3];
+                                v[a] = x[(l, col(h, k))];
+                                Vec3::from_array(v)
+                            })
+                            .collect()
+                    })
+                    .collect()
+            })
+            .collect();
+        Ok(AffineBasis::new(base, responses))
     }
 
     /// The shear-removal solve (Eq. 2.10, or 2.11 with `scale_features`) after
@@ -523,11 +446,13 @@ impl EditMethod for ImplicitEditor {
             CholeskyOptions::default(),
         )?;
         let second_ms = ms_since(clock) - first_ms;
-        Ok(Self {
+        let mut editor = Self {
             first,
             second,
             first_ms,
             second_ms,
+            basis: None,
+            basis_ms: 0.0,
             displaced: x,
             stencil,
             q,
@@ -538,7 +463,11 @@ impl EditMethod for ImplicitEditor {
             mu,
             options: *options,
             last_first: None,
-        })
+        };
+        if options.drag_basis && problem.handles.iter().all(|h| h.shape.is_none()) {
+            editor.precompute_drag_basis(problem)?;
+        }
+        Ok(editor)
     }
 
     fn solve(
@@ -575,101 +504,5 @@ impl ImplicitEditor {
     /// The coherence weight `μ` in absolute units.
     pub fn coherence_mu(&self) -> f64 {
         self.mu
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::edit::run::bench_spec;
-    use crate::generate::icosphere;
-
-    #[test]
-    fn closed_form_eigenvalues_agree_with_the_iterative_ones() {
-        let mut seed = 1u64;
-        let mut rnd = || {
-            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
-        for case in 0..200 {
-            // V Vᵀ of a ring flattened towards a plane by up to 1e-4: cond up to ~1e8.
-            let flat = 10f64.powi(-(case % 5));
-            let mut m = Matrix3::zeros();
-            for _ in 0..6 {
-                let d = nalgebra::Vector3::new(rnd(), rnd(), rnd() * flat);
-                m += d * d.transpose();
-            }
-            let (lo, hi) = eigen_extremes(&m);
-            let e = m.symmetric_eigenvalues();
-            assert!((hi - e.max()).abs() <= 1e-12 * e.max(), "case {case}");
-            assert!((lo - e.min()).abs() <= 1e-12 * e.max(), "case {case}");
-            let (c, c_ref) = (hi / lo, e.max() / e.min());
-            assert!(
-                (c - c_ref).abs() <= 1e-6 * c_ref,
-                "case {case}: {c} vs {c_ref}"
-            );
-        }
-        let d = Matrix3::from_diagonal(&nalgebra::Vector3::new(3.0, 1.0, 2.0));
-        assert_eq!(eigen_extremes(&d), (1.0, 3.0));
-        assert_eq!(eigen_extremes(&(Matrix3::identity() * 2.0)), (2.0, 2.0));
-    }
-
-    #[test]
-    fn coherence_rows_are_the_pair_laplacian_times_the_gradient_rows() {
-        let mesh = icosphere(2, 1.0);
-        let spec = bench_spec(&mesh, 0.6).unwrap();
-        let p = EditProblem::new(&mesh, &spec).unwrap();
-        let (n, n_roi) = (p.len(), p.n_roi);
-        let stencil: Vec<Vec<usize>> = (0..n_roi)
-            .map(|i| {
-                std::iter::once(i)
-                    .chain(p.neighbors[i].iter().copied())
-                    .collect()
-            })
-            .collect();
-        let q: Vec<Vec<[f64; 3]>> = stencil.iter().map(|s| fit(&p.rest, s).1.unwrap()).collect();
-        for every in [usize::MAX, 5] {
-            // Some gradients fixed: their rows of Qm are zero.
-            let fixed = |i: usize| every != usize::MAX && i % every == 0;
-            let got = coherence_rows(&p, &stencil, &q, fixed).unwrap();
-            assert_eq!((got.nrows(), got.ncols()), (n, 3 * n_roi));
-            // Dense reference: L of the pairs within graph distance 2 (ROI only), times Qm.
-            let mut lap = vec![vec![0.0; n_roi]; n_roi];
-            for (i, row) in lap.iter_mut().enumerate() {
-                let mut near: Vec<usize> = Vec::new();
-                for &j in &p.neighbors[i] {
-                    near.push(j);
-                    near.extend(p.neighbors[j].iter().copied());
-                }
-                near.sort_unstable();
-                near.dedup();
-                for k in near.into_iter().filter(|&k| k < n_roi && k != i) {
-                    row[k] = -1.0;
-                    row[i] += 1.0;
-                }
-            }
-            let mut qm = vec![vec![0.0; n]; 3 * n_roi];
-            for i in (0..n_roi).filter(|&i| !fixed(i)) {
-                for (&s, row) in stencil[i].iter().zip(&q[i]) {
-                    for c in 0..3 {
-                        qm[3 * i + c][s] = row[c];
-                    }
-                }
-            }
-            let mut dense = vec![vec![0.0; 3 * n_roi]; n];
-            for (s, col, v) in crate::solve::sparse_triplets(got.as_ref()) {
-                dense[s][col] += v;
-            }
-            let mut worst = 0.0f64;
-            for i in 0..n_roi {
-                for c in 0..3 {
-                    for s in 0..n {
-                        let want: f64 = (0..n_roi).map(|k| lap[i][k] * qm[3 * k + c][s]).sum();
-                        worst = worst.max((dense[s][3 * i + c] - want).abs());
-                    }
-                }
-            }
-            assert!(worst < 1e-9, "largest difference {worst}");
-        }
     }
 }

@@ -20,6 +20,7 @@ use std::time::Instant;
 use faer::Mat;
 use nalgebra::DMatrix;
 
+use super::basis::{AffineBasis, AFFINE_PARAMETERS};
 use super::problem::{EditProblem, Role};
 use super::session::EditMethod;
 use super::similarity::{mat_vec, rotation_from_vector, Mat3, Similarity};
@@ -250,76 +251,28 @@ impl LseEditor {
     }
 }
 
-/// Precomputed responses to the 12 affine degrees of freedom of every handle.
-#[derive(Debug, Clone)]
-pub struct AffineBasis {
-    base: Vec<Vec3>,
-    /// Per handle: 9 responses to `(A − I)_{ab}` then 3 to the translation `τ_a`.
-    responses: Vec<Vec<Vec<Vec3>>>,
-}
-
 impl LseEditor {
     /// Precomputes the response of the (single-shot) solution to each of the 12 affine
-    /// parameters of every handle: 12 solves per handle, once per factorisation. The
-    /// single-shot LSE solution is linear in the handle targets, and a similarity target
-    /// `u = A v + τ` is linear in `(A, τ)`, so afterwards a move is 12 vector updates per
-    /// handle instead of a solve (the basis-function idea of Botsch & Kobbelt 2004, *An
-    /// Intuitive Framework for Real-Time Freeform Modeling*, §4), exact to round-off.
+    /// parameters of every handle (see [`AffineBasis`]): 12 solves per handle, once per
+    /// factorisation; afterwards [`AffineBasis::combine`] answers a move exactly.
     pub fn precompute_basis(&self, problem: &EditProblem) -> Result<AffineBasis, EditError> {
+        AffineBasis::check_handles(problem)?;
         let rest = problem.rest.clone();
         let base = self.solve_with(&self.base, &self.lap_rhs, problem, &rest)?;
         let mut responses = Vec::with_capacity(problem.handles.len());
         for h in &problem.handles {
-            let mut per = Vec::with_capacity(12);
-            for k in 0..12 {
+            let mut per = Vec::with_capacity(AFFINE_PARAMETERS);
+            for k in 0..AFFINE_PARAMETERS {
                 let mut t = rest.clone();
                 for &c in &h.vertices {
-                    let mut d = [0.0; 3];
-                    if k < 9 {
-                        d[k / 3] = rest[c][k % 3];
-                    } else {
-                        d[k - 9] = 1.0;
-                    }
-                    t[c] += Vec3::from_array(d);
+                    t[c] += AffineBasis::target_delta(k, rest[c]);
                 }
                 let x = self.solve_with(&self.base, &self.lap_rhs, problem, &t)?;
                 per.push(x.iter().zip(&base).map(|(a, b)| *a - *b).collect());
             }
             responses.push(per);
         }
-        Ok(AffineBasis { base, responses })
-    }
-
-    /// The single-shot solution for `transforms` from a precomputed [`AffineBasis`].
-    pub fn solve_basis(
-        basis: &AffineBasis,
-        problem: &EditProblem,
-        transforms: &[Similarity],
-    ) -> Result<Vec<Vec3>, EditError> {
-        problem.check_transforms(transforms)?;
-        if problem.handles.iter().any(|h| h.shape.is_some()) {
-            return Err(EditError::Spec(
-                "the affine basis covers transform handles only, not positions".into(),
-            ));
-        }
-        let mut x = basis.base.clone();
-        for (t, per) in transforms.iter().zip(&basis.responses) {
-            let a = t.linear();
-            let tau = t.apply(Vec3::ZERO);
-            for k in 0..12 {
-                let coef = if k < 9 {
-                    a[(k / 3, k % 3)] - if k / 3 == k % 3 { 1.0 } else { 0.0 }
-                } else {
-                    tau[k - 9]
-                };
-                if coef != 0.0 {
-                    for (xi, r) in x.iter_mut().zip(&per[k]) {
-                        *xi += *r * coef;
-                    }
-                }
-            }
-        }
-        Ok(x)
+        Ok(AffineBasis::new(base, responses))
     }
 }
 

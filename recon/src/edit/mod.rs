@@ -12,11 +12,13 @@
 //! * tools: [`coating`] (coating transfer), [`transplant`], [`denoise`];
 //! * [`detail_error`]: the normalised as-rigid-as-possible energy used to compare them.
 
+pub mod basis;
 pub mod coating;
 pub mod denoise;
 pub mod detail_error;
 pub mod frames;
 pub mod implicit;
+mod implicit_fit;
 pub mod local;
 pub mod lse;
 pub mod naive;
@@ -30,6 +32,7 @@ pub mod spec;
 pub mod system;
 pub mod transplant;
 
+pub use basis::AffineBasis;
 pub use detail_error::detail_error;
 pub use frames::{fit_similarity, HandleShape};
 pub use implicit::{ImplicitEditor, ImplicitOptions};

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use faer::Mat;
 
-use super::implicit::ImplicitEditor;
+use super::implicit::{ImplicitEditor, ImplicitOptions};
 use super::local::cotan_stiffness;
 use super::lse::{LseEditor, LseOptions};
 use super::naive::NaiveLaplacian;
@@ -111,7 +111,13 @@ pub fn edit_mesh(
             },
         )?,
         Method::Poisson => timed::<PoissonEditor>(&p, &Default::default())?,
-        Method::Implicit => timed::<ImplicitEditor>(&p, &Default::default())?,
+        Method::Implicit => timed::<ImplicitEditor>(
+            &p,
+            &ImplicitOptions {
+                drag_basis: false,
+                ..Default::default()
+            },
+        )?,
         Method::Naive => timed::<NaiveLaplacian>(&p, &Default::default())?,
     };
     let x = p.scatter(mesh.positions(), &local);
@@ -147,10 +153,12 @@ pub struct BenchEditReport {
     pub cotan_factor_ms: f64,
     /// Stored entries of the method's main factor (0 when not tracked).
     pub factor_entries: usize,
-    /// LSE only: time to precompute the 12 affine responses per handle, ms.
+    /// LSE and implicit (first system) only: time to precompute the 12 affine responses per
+    /// handle ([`super::AffineBasis`]), ms.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub basis_ms: Option<f64>,
-    /// LSE only: median move from the precomputed affine responses (no solve), ms.
+    /// LSE and implicit only: median move from the precomputed affine responses (no solve;
+    /// implicit: the drag, with the degenerate vertices' pull-back), ms.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub per_move_basis_ms: Option<f64>,
     /// Where `factor_ms` went, by part (implicit: the first system, Eq. 2.8, and its
@@ -290,22 +298,34 @@ pub fn bench_edit(
             for k in 0..moves.max(1) {
                 let tr = bench_move(&p, k + 1, scale);
                 let t = Instant::now();
-                std::hint::black_box(LseEditor::solve_basis(&basis, &p, &tr)?);
+                std::hint::black_box(basis.combine(&p, &tr)?);
                 per.push(ms(t));
             }
             per_move_basis_ms = Some(median(per));
             r
         }
         Method::Poisson => bench_method::<PoissonEditor>(&p, &Default::default(), moves, scale)?,
-        Method::Implicit => bench_method::<ImplicitEditor>(
-            &p,
-            &super::ImplicitOptions {
+        Method::Implicit => {
+            // The drag: first system only, one solve per move, then with the drag basis.
+            let options = ImplicitOptions {
                 second_solve: false,
+                drag_basis: false,
                 ..Default::default()
-            },
-            moves,
-            scale,
-        )?,
+            };
+            let r = bench_method::<ImplicitEditor>(&p, &options, moves, scale)?;
+            let mut editor = ImplicitEditor::factor(&p, &options)?;
+            editor.precompute_drag_basis(&p)?;
+            basis_ms = Some(editor.drag_basis_ms());
+            let mut per = Vec::new();
+            for k in 0..moves.max(1) {
+                let tr = bench_move(&p, k + 1, scale);
+                let t = Instant::now();
+                std::hint::black_box(editor.solve_drag(&p, &tr)?);
+                per.push(ms(t));
+            }
+            per_move_basis_ms = Some(median(per));
+            r
+        }
         Method::Naive => bench_method::<NaiveLaplacian>(&p, &Default::default(), moves, scale)?,
     };
     Ok(BenchEditReport {

@@ -439,6 +439,43 @@ impl FactoredQuadratic {
         let dk = Mat::from_fn(self.known.len(), c, |r, col| {
             known_values[(r, col)] - self.x0.as_ref().map_or(0.0, |x| x[(self.known[r], col)])
         });
+        let mut rhs = self.unknown_rhs(b, dk.as_ref(), self.shared.is_none())?;
+        match &self.shared {
+            Some(shared) => self.chol.solve_in_place_plus(shared, rhs.as_mut())?,
+            None => self.chol.solve_in_place(rhs.as_mut())?,
+        }
+        Ok(self.scatter(rhs.as_ref(), known_values, self.x0.as_ref()))
+    }
+
+    /// The linear part of [`Self::solve`]: the change of the solution (`n × c`) when the
+    /// right-hand sides change by `b` and the fixed values by `known_delta`, without the
+    /// reference. The solution is affine in both, so this is how a caller precomputes its
+    /// response to each parameter of a move (implicit editing's drag basis); any `c`.
+    pub fn solve_response(
+        &self,
+        b: &[Option<MatRef<'_, f64>>],
+        known_delta: MatRef<'_, f64>,
+    ) -> Result<Mat<f64>, SolveError> {
+        if b.len() != self.parts.len() || known_delta.nrows() != self.known.len() {
+            return Err(SolveError::Dimension(
+                "right-hand sides or fixed values have the wrong shape".into(),
+            ));
+        }
+        let mut rhs = self.unknown_rhs(b, known_delta, false)?;
+        self.chol.solve_in_place(rhs.as_mut())?;
+        Ok(self.scatter(rhs.as_ref(), known_delta, None))
+    }
+
+    /// `Σ w A_uᵀ W (bₜ − A_k Δx_k)` over the unknowns (minus each term's reference part
+    /// when `with_x0`): the residual is sparse in practice (only moved handles and
+    /// gradient rows), so only its nonzero rows are multiplied.
+    fn unknown_rhs(
+        &self,
+        b: &[Option<MatRef<'_, f64>>],
+        dk: MatRef<'_, f64>,
+        with_x0: bool,
+    ) -> Result<Mat<f64>, SolveError> {
+        let c = dk.ncols();
         // rhs = Σ w A_uᵀ W (b − A x₀ − A_k Δx_k); the residual b − A_k Δx_k is sparse in
         // practice (only moved handles and gradient rows), so only its nonzero rows are
         // multiplied.
@@ -447,7 +484,7 @@ impl FactoredQuadratic {
             .filter(|&r| (0..c).any(|col| dk[(r, col)] != 0.0))
             .collect();
         for (p, bt) in self.parts.iter().zip(b) {
-            if self.shared.is_none() {
+            if with_x0 {
                 if let Some(r0) = &p.rhs_x0 {
                     rhs -= r0;
                 }
@@ -493,21 +530,28 @@ impl FactoredQuadratic {
                 }
             }
         }
-        match &self.shared {
-            Some(shared) => self.chol.solve_in_place_plus(shared, rhs.as_mut())?,
-            None => self.chol.solve_in_place(rhs.as_mut())?,
-        }
+        Ok(rhs)
+    }
+
+    /// All `n` entries: the unknowns from `u` (plus the reference), the fixed ones from `known`.
+    fn scatter(
+        &self,
+        u: MatRef<'_, f64>,
+        known: MatRef<'_, f64>,
+        x0: Option<&Mat<f64>>,
+    ) -> Mat<f64> {
+        let c = u.ncols();
         let mut x = Mat::zeros(self.n, c);
         for (r, &i) in self.unknown.iter().enumerate() {
             for col in 0..c {
-                x[(i, col)] = rhs[(r, col)] + self.x0.as_ref().map_or(0.0, |x| x[(i, col)]);
+                x[(i, col)] = u[(r, col)] + x0.map_or(0.0, |x| x[(i, col)]);
             }
         }
         for (r, &i) in self.known.iter().enumerate() {
             for col in 0..c {
-                x[(i, col)] = known_values[(r, col)];
+                x[(i, col)] = known[(r, col)];
             }
         }
-        Ok(x)
+        x
     }
 }
