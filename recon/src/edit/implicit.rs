@@ -325,12 +325,25 @@ impl ImplicitEditor {
     }
 }
 
-impl EditMethod for ImplicitEditor {
-    type Options = ImplicitOptions;
+/// The first system (Eq. 2.8), factored, with what its solves need.
+struct FirstSystem {
+    system: FactoredQuadratic,
+    displaced: Vec<Vec3>,
+    stencil: Vec<Vec<usize>>,
+    q: Vec<Vec<[f64; 3]>>,
+    delta: Vec<Vec3>,
+    n_degenerate: usize,
+    n_still_degenerate: usize,
+    mu: f64,
+    /// Time to build and factor it, ms.
+    ms: f64,
+}
 
-    fn factor(problem: &EditProblem, options: &ImplicitOptions) -> Result<Self, EditError> {
+impl FirstSystem {
+    /// Degenerate-vertex displacement, gradient fits, the `E_L` and coherence rows, and the
+    /// factorisation.
+    fn build(problem: &EditProblem, options: &ImplicitOptions) -> Result<Self, EditError> {
         let clock = std::time::Instant::now();
-        check_singular(problem)?;
         let n = problem.len();
         let n_roi = problem.n_roi;
         let stencil: Vec<Vec<usize>> = (0..n_roi)
@@ -434,33 +447,81 @@ impl EditMethod for ImplicitEditor {
         ];
         let x0 = Mat::from_fn(n, 3, |i, c| x[i][c]);
         let first = FactoredQuadratic::new(n, terms, &problem.constrained(), Some(x0))?;
-        let first_ms = ms_since(clock);
-        let k = cotan_stiffness(problem)?;
-        let kv = sparse_mul_dense(
-            k.as_ref(),
-            Mat::from_fn(n, 3, |i, c| problem.rest[i][c]).as_ref(),
-        )?;
-        let second = FixedSolver::precompute(
-            k.as_ref(),
-            &problem.constrained(),
-            CholeskyOptions::default(),
-        )?;
-        let second_ms = ms_since(clock) - first_ms;
-        let mut editor = Self {
-            first,
-            second,
-            first_ms,
-            second_ms,
-            basis: None,
-            basis_ms: 0.0,
+        Ok(Self {
+            system: first,
             displaced: x,
             stencil,
             q,
             delta,
-            kv,
             n_degenerate,
             n_still_degenerate,
             mu,
+            ms: ms_since(clock),
+        })
+    }
+}
+
+/// The shear-removal system (Eq. 2.10): the cotangent stiffness of the original mesh,
+/// factored, and its rest coordinates `K v`.
+struct SecondSystem {
+    solver: FixedSolver,
+    kv: Mat<f64>,
+    /// Time to build and factor it, ms.
+    ms: f64,
+}
+
+impl SecondSystem {
+    fn build(problem: &EditProblem) -> Result<Self, EditError> {
+        let clock = std::time::Instant::now();
+        let k = cotan_stiffness(problem)?;
+        let kv = sparse_mul_dense(
+            k.as_ref(),
+            Mat::from_fn(problem.len(), 3, |i, c| problem.rest[i][c]).as_ref(),
+        )?;
+        let solver = FixedSolver::precompute(
+            k.as_ref(),
+            &problem.constrained(),
+            CholeskyOptions::default(),
+        )?;
+        Ok(Self {
+            solver,
+            kv,
+            ms: ms_since(clock),
+        })
+    }
+}
+
+impl EditMethod for ImplicitEditor {
+    type Options = ImplicitOptions;
+
+    fn factor(problem: &EditProblem, options: &ImplicitOptions) -> Result<Self, EditError> {
+        check_singular(problem)?;
+        // The two systems are independent: the second (a cotangent factorisation) is built
+        // on another thread while this one builds the first.
+        let (first, second) = std::thread::scope(|scope| {
+            let second = scope.spawn(|| SecondSystem::build(problem));
+            let first = FirstSystem::build(problem, options);
+            let second = second
+                .join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+            (first, second)
+        });
+        let (first, second) = (first?, second?);
+        let mut editor = Self {
+            first: first.system,
+            second: second.solver,
+            first_ms: first.ms,
+            second_ms: second.ms,
+            basis: None,
+            basis_ms: 0.0,
+            displaced: first.displaced,
+            stencil: first.stencil,
+            q: first.q,
+            delta: first.delta,
+            kv: second.kv,
+            n_degenerate: first.n_degenerate,
+            n_still_degenerate: first.n_still_degenerate,
+            mu: first.mu,
             options: *options,
             last_first: None,
         };

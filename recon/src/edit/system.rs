@@ -165,6 +165,19 @@ impl RowBuilder {
 
     /// Appends a row; fails on a column out of range.
     pub fn push(&mut self, entries: &[(usize, f64)]) -> Result<(), SolveError> {
+        if entries.windows(2).all(|w| w[0].0 < w[1].0) {
+            // Already sorted without duplicates (the coherence rows): stored as given.
+            if let Some(&(j, _)) = entries.last().filter(|e| e.0 >= self.ncols) {
+                return Err(SolveError::IndexOutOfRange {
+                    index: j,
+                    size: self.ncols,
+                });
+            }
+            self.col_idx.extend(entries.iter().map(|e| e.0));
+            self.vals.extend(entries.iter().map(|e| e.1));
+            self.row_ptr.push(self.col_idx.len());
+            return Ok(());
+        }
         self.buf.clear();
         self.buf.extend_from_slice(entries);
         self.buf.sort_unstable_by_key(|e| e.0);

@@ -12,8 +12,8 @@
 //! On a mesh's operators the separators are level curves of the graph distance, of length
 //! `O(√n)`, so the factor holds `O(n log n)` entries where a pure minimum-degree ordering of
 //! a large surface grows faster. Measured on Laplacian surface editing's 2-ring, 3×3-block
-//! system it holds 0.76× AMD's entries at 30k vertices and 0.78× at 100k (162M instead of
-//! 207M), and a solve, bounded by reading the factor, shrinks with it. It is within 8% of
+//! system it holds 0.77× AMD's entries at 30k vertices and 0.74× at 100k (159M instead of
+//! 216M), and a solve, bounded by reading the factor, shrinks with it. It is within 8% of
 //! METIS's `NodeND` there; on square grids, whose level sets run diagonally, AMD is 10%
 //! smaller, which is why `FillOrdering::Auto` keeps the smaller of the two.
 
@@ -35,6 +35,9 @@ const PERIPHERAL_SWEEPS: usize = 2;
 /// A separator level is searched among levels whose preceding weight lies in this
 /// fraction band of the part's weight; the lightest level wins.
 const BALANCE: (f64, f64) = (0.35, 0.65);
+
+/// The level of a node the current search has not reached.
+const UNSEEN: u32 = u32::MAX;
 
 /// Symmetric adjacency (no self loops) of the compressed graph, with node weights.
 struct Graph {
@@ -61,8 +64,7 @@ pub fn nested_dissection(a: SymbolicSparseColMatRef<'_, usize>) -> Result<Vec<us
     let (full, members) = compress(symmetric_pattern(a));
     let mut d = Dissector {
         g: &full,
-        stamp: vec![0; full.len()],
-        level: vec![usize::MAX; full.len()],
+        state: vec![(0, UNSEEN); full.len()],
         next_stamp: 0,
     };
     let mut order = Vec::with_capacity(full.len());
@@ -211,10 +213,10 @@ fn compress(g: Graph) -> (Graph, Vec<Vec<usize>>) {
 
 struct Dissector<'g> {
     g: &'g Graph,
-    /// Membership of the part being processed (`stamp[v] == current`).
-    stamp: Vec<u32>,
-    /// BFS level within the current part.
-    level: Vec<usize>,
+    /// Per node: the stamp of the part it was last marked in (membership of the part being
+    /// processed is `state[v].0 == current`) and its BFS level within that part
+    /// ([`UNSEEN`] before the search reaches it); side by side, since a search reads both.
+    state: Vec<(u32, u32)>,
     next_stamp: u32,
 }
 
@@ -223,8 +225,7 @@ impl Dissector<'_> {
         self.next_stamp += 1;
         let s = self.next_stamp;
         for &v in nodes {
-            self.stamp[v] = s;
-            self.level[v] = usize::MAX;
+            self.state[v] = (s, UNSEEN);
         }
         s
     }
@@ -248,7 +249,7 @@ impl Dissector<'_> {
         if reached < nodes.len() {
             let mut comps = Vec::new();
             for &v in &nodes {
-                if self.level[v] == usize::MAX {
+                if self.state[v].1 == UNSEEN {
                     let comp: Vec<usize> = self.levels_from(v, s).concat();
                     comps.push(comp);
                 }
@@ -273,14 +274,17 @@ impl Dissector<'_> {
                 .g
                 .neighbors(v)
                 .iter()
-                .any(|&u| self.stamp[u] == s && self.level[u] == k + 1);
+                .any(|&u| self.state[u] == (s, (k + 1) as u32));
             if touches_far {
                 sep.push(v);
             } else {
                 near.push(v);
             }
         }
-        let far: Vec<usize> = levels[k + 1..].concat();
+        // The far side starts from its last level, which holds a peripheral node of that
+        // side (the near side starts from this part's root): the child's first level
+        // structure then usually needs no pseudo-peripheral restart.
+        let far: Vec<usize> = levels[k + 1..].iter().rev().flatten().copied().collect();
         self.dissect(near, out)?;
         self.dissect(far, out)?;
         out.extend_from_slice(&sep);
@@ -311,7 +315,7 @@ impl Dissector<'_> {
     fn clear_levels(&mut self, levels: &[Vec<usize>]) {
         for l in levels {
             for &v in l {
-                self.level[v] = usize::MAX;
+                self.state[v].1 = UNSEEN;
             }
         }
     }
@@ -319,7 +323,7 @@ impl Dissector<'_> {
     fn set_levels(&mut self, levels: &[Vec<usize>]) {
         for (k, l) in levels.iter().enumerate() {
             for &v in l {
-                self.level[v] = k;
+                self.state[v].1 = k as u32;
             }
         }
     }
@@ -327,14 +331,14 @@ impl Dissector<'_> {
     /// The rooted level structure of `root` within the part `s` (sets `level`).
     fn levels_from(&mut self, root: usize, s: u32) -> Vec<Vec<usize>> {
         let mut levels = vec![vec![root]];
-        self.level[root] = 0;
+        self.state[root].1 = 0;
         loop {
             let k = levels.len();
             let mut next = Vec::new();
             for &v in &levels[k - 1] {
                 for &u in self.g.neighbors(v) {
-                    if self.stamp[u] == s && self.level[u] == usize::MAX {
-                        self.level[u] = k;
+                    if self.state[u] == (s, UNSEEN) {
+                        self.state[u].1 = k as u32;
                         next.push(u);
                     }
                 }
@@ -377,7 +381,7 @@ impl Dissector<'_> {
         let s = self.mark(nodes);
         // `level` is free here: it holds each node's index within the leaf.
         for (i, &v) in nodes.iter().enumerate() {
-            self.level[v] = i;
+            self.state[v].1 = i as u32;
         }
         let mut col_ptr = Vec::with_capacity(m + 1);
         let mut row_idx = Vec::new();
@@ -388,8 +392,8 @@ impl Dissector<'_> {
                 self.g
                     .neighbors(v)
                     .iter()
-                    .filter(|&&u| self.stamp[u] == s)
-                    .map(|&u| self.level[u]),
+                    .filter(|&&u| self.state[u].0 == s)
+                    .map(|&u| self.state[u].1 as usize),
             );
             row_idx[start..].sort_unstable();
             col_ptr.push(row_idx.len());
