@@ -163,40 +163,31 @@ impl RowBuilder {
         self.row_ptr.len() - 1
     }
 
-    /// Appends a row; fails on a column out of range.
+    /// Appends a row; fails on a column out of range, leaving the matrix as it was.
     pub fn push(&mut self, entries: &[(usize, f64)]) -> Result<(), SolveError> {
-        if entries.windows(2).all(|w| w[0].0 < w[1].0) {
-            // Already sorted without duplicates (the coherence rows): stored as given.
-            if let Some(&(j, _)) = entries.last().filter(|e| e.0 >= self.ncols) {
-                return Err(SolveError::IndexOutOfRange {
-                    index: j,
-                    size: self.ncols,
-                });
-            }
-            self.col_idx.extend(entries.iter().map(|e| e.0));
-            self.vals.extend(entries.iter().map(|e| e.1));
-            self.row_ptr.push(self.col_idx.len());
-            return Ok(());
+        // Rows already sorted without duplicates (the coherence rows) need no copy.
+        let row: &[(usize, f64)] = if entries.windows(2).all(|w| w[0].0 < w[1].0) {
+            entries
+        } else {
+            self.buf.clear();
+            self.buf.extend_from_slice(entries);
+            self.buf.sort_unstable_by_key(|e| e.0);
+            &self.buf
+        };
+        if let Some(&(j, _)) = row.last().filter(|e| e.0 >= self.ncols) {
+            return Err(SolveError::IndexOutOfRange {
+                index: j,
+                size: self.ncols,
+            });
         }
-        self.buf.clear();
-        self.buf.extend_from_slice(entries);
-        self.buf.sort_unstable_by_key(|e| e.0);
-        let mut last = usize::MAX;
-        for &(j, v) in &self.buf {
-            if j >= self.ncols {
-                return Err(SolveError::IndexOutOfRange {
-                    index: j,
-                    size: self.ncols,
-                });
-            }
-            if j == last {
-                if let Some(x) = self.vals.last_mut() {
-                    *x += v;
+        let start = self.col_idx.len();
+        for &(j, v) in row {
+            match self.vals.last_mut() {
+                Some(x) if self.col_idx.len() > start && self.col_idx.last() == Some(&j) => *x += v,
+                _ => {
+                    self.col_idx.push(j);
+                    self.vals.push(v);
                 }
-            } else {
-                self.col_idx.push(j);
-                self.vals.push(v);
-                last = j;
             }
         }
         self.row_ptr.push(self.col_idx.len());
@@ -566,5 +557,39 @@ impl FactoredQuadratic {
             }
         }
         x
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_in_any_order_sum_duplicates_and_sorted_rows_are_stored_as_given() {
+        let mut b = RowBuilder::new(4);
+        b.push(&[(3, 1.0), (0, 2.0), (3, 0.5)]).unwrap();
+        b.push(&[(0, -1.0), (1, 4.0), (2, 5.0)]).unwrap();
+        b.push(&[]).unwrap();
+        // A rejected row leaves nothing behind.
+        for bad in [&[(0, 1.0), (4, 1.0)][..], &[(4, 1.0), (0, 1.0)][..]] {
+            assert!(matches!(
+                b.push(bad),
+                Err(SolveError::IndexOutOfRange { index: 4, size: 4 })
+            ));
+        }
+        let a = b.finish().unwrap();
+        assert_eq!((a.nrows(), a.ncols(), a.compute_nnz()), (3, 4, 5));
+        let mut dense = [[0.0; 4]; 3];
+        for (i, j, v) in crate::solve::sparse_triplets(a.as_ref()) {
+            dense[i][j] += v;
+        }
+        assert_eq!(
+            dense,
+            [
+                [2.0, 0.0, 0.0, 1.5],
+                [-1.0, 4.0, 5.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0]
+            ]
+        );
     }
 }
