@@ -5,6 +5,7 @@ use fires_record::Meta;
 use nalgebra::{Matrix3, Vector3};
 
 use crate::stereo::StereoRig;
+use crate::track::frame_clock::FrameTiming;
 use crate::track::fusion::ImuScale;
 use crate::track::PenGeometry;
 
@@ -53,6 +54,21 @@ pub fn row_times_ns(meta: &Meta) -> [f64; 2] {
         let stream = meta.cameras.iter().find(|c| usize::from(c.id) == i);
         let height = meta.rig.cameras.get(i).map_or(0, |c| c.intrinsics.height);
         stream.map_or(0.0, |s| s.row_period_s(height) * 1e9)
+    })
+}
+
+/// How each camera's frames are timed (left, right), from the metadata's nominal rates and timing noise
+/// (the default, stamps used as they are, for a camera the metadata does not describe).
+pub fn frame_timings(meta: &Meta) -> [FrameTiming; 2] {
+    std::array::from_fn(|i| {
+        meta.cameras
+            .iter()
+            .find(|c| usize::from(c.id) == i)
+            .map_or(FrameTiming::default(), |s| FrameTiming {
+                period_ns: 1e9 / s.nominal_rate_hz,
+                exposure_jitter_ns: s.exposure_jitter_s * 1e9,
+                stamp_noise_ns: s.timestamp_noise_s * 1e9,
+            })
     })
 }
 

@@ -269,6 +269,15 @@ pub struct CameraStream {
     /// row (0: a global shutter, every row at the frame time). Format 1.1; absent in 1.0 files.
     #[serde(default)]
     pub readout_s: f64,
+    /// Standard deviation of the frames' exposure times about their period, seconds (0 for a free-running
+    /// camera's crystal clock, or unknown). Format 1.1, optional.
+    #[serde(default)]
+    pub exposure_jitter_s: f64,
+    /// Standard deviation of the recorded `exposure_time_ns` about the true exposure time, seconds (a webcam
+    /// stamped by the host on USB arrival: about 1 ms; 0: exact or unknown, and the tracker uses the stamps as
+    /// they are). Format 1.1, optional.
+    #[serde(default)]
+    pub timestamp_noise_s: f64,
 }
 
 impl CameraStream {
@@ -280,6 +289,8 @@ impl CameraStream {
             nominal_rate_hz,
             exposure_s: 0.0,
             readout_s: 0.0,
+            exposure_jitter_s: 0.0,
+            timestamp_noise_s: 0.0,
         }
     }
 

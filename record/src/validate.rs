@@ -177,6 +177,19 @@ impl Meta {
                     ));
                 }
             }
+            for (field, v) in [
+                ("exposure_jitter_s", s.exposure_jitter_s),
+                ("timestamp_noise_s", s.timestamp_noise_s),
+            ] {
+                // Beyond a quarter period the frames' order and count are no longer readable from their times.
+                if !(v.is_finite() && v >= 0.0 && v < 0.25 * period) {
+                    return Err(problem(
+                        format!("cameras[{k}].{field}"),
+                        v,
+                        format!("must be a standard deviation from 0 s to a quarter frame period ({:.4} s)", 0.25 * period),
+                    ));
+                }
+            }
         }
         let l = &self.pen.led_positions_m;
         for (i, &v) in l.iter().enumerate() {

@@ -119,3 +119,28 @@ fn distortion_pen_streams_and_link_are_checked() {
         Err(RecordError::InvalidMeta { .. })
     ));
 }
+
+#[test]
+fn frame_timing_noise_is_a_standard_deviation_below_a_quarter_period() {
+    // test_meta's cameras run at their nominal rate; a quarter of their period is the limit.
+    let period = 1.0 / meta().cameras[0].nominal_rate_hz;
+    let ok = open_edited(|m| {
+        m.cameras[0].exposure_jitter_s = 0.0;
+        m.cameras[0].timestamp_noise_s = 0.2 * period;
+    });
+    assert!(ok.is_ok());
+    assert!(problem(|m| m.cameras[0].timestamp_noise_s = -1e-3)
+        .starts_with("cameras[0].timestamp_noise_s = -0.001"));
+    assert!(
+        problem(|m| m.cameras[0].exposure_jitter_s = 0.3 * period).contains("quarter frame period")
+    );
+    assert!(problem(|m| m.cameras[0].timestamp_noise_s = f64::NAN).contains("standard deviation"));
+    // Absent in a 1.1 file written before the fields existed: 0, stamps used as they are.
+    let json = serde_json::to_string(&meta()).unwrap();
+    let older = json
+        .replace(",\"exposure_jitter_s\":0.0", "")
+        .replace(",\"timestamp_noise_s\":0.0", "");
+    assert!(!older.contains("timestamp_noise_s"));
+    let back: Meta = serde_json::from_str(&older).unwrap();
+    assert_eq!(back, meta());
+}

@@ -241,6 +241,8 @@ pub fn run(
                 nominal_rate_hz: c.rate_hz,
                 exposure_s: c.timing.exposure_s,
                 readout_s: c.timing.readout_s,
+                exposure_jitter_s: c.jitter_s,
+                timestamp_noise_s: c.timestamp_noise_s,
             })
             .collect(),
         opts.truth,

@@ -23,6 +23,7 @@
 //! assert_eq!(sample.quality, TrackQuality::Lost); // one blob is not a pen
 //! ```
 
+pub mod frame_clock;
 pub mod fusion;
 pub mod identify;
 pub mod line_fit;

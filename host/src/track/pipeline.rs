@@ -49,6 +49,7 @@ pub use config::{DirectionSource, TrackerConfig};
 pub use refusal::{Refusal, UNALIGNED_MAX_DT_NS};
 pub use safety::Unsafe;
 
+use super::frame_clock::FrameClock;
 use super::fusion::{ImuSample, MagOffset, TipDeadReckoner, TipFilter, WorldFit, WorldReference};
 use super::identify::{
     Identification, Identifier, IdentifyError, IdentifyPrior, RefusedBy, Resolution,
@@ -190,6 +191,8 @@ pub struct Tracker {
     /// The current pair's aligned and undistorted points.
     points: PairPoints,
     clock: ClockOffsetEstimator,
+    /// Each camera's frame times from its stamps (left, right).
+    frame_clocks: [FrameClock; 2],
     /// Direction filter, world reference and identification prior.
     direction: DirectionPrior,
     /// Accepted labels and the labelling checks.
@@ -217,6 +220,7 @@ impl Tracker {
             align: TimeAlignment::new(AlignOptions::from_config(&config)),
             points: PairPoints::default(),
             clock: ClockOffsetEstimator::new(ClockOptions::from_config(&config)),
+            frame_clocks: config.frame_timing.map(FrameClock::new),
             direction: DirectionPrior::new(&config),
             labels: LabelGuard::new(&config),
             // Until a reference is known the dead reckoner runs in the default frame.
@@ -299,13 +303,15 @@ impl Tracker {
 
     /// Feeds one camera frame; returns a sample when it could be paired with the other camera.
     pub fn push_frame(&mut self, frame: CameraFrame) -> Option<TrackSample> {
-        let t = match frame.camera {
-            CameraId::Left => frame.t_ns,
-            CameraId::Right => frame.t_ns.saturating_add_signed(self.clock_offset_ns()),
-        };
         let (this, other) = match frame.camera {
             CameraId::Left => (0, 1),
             CameraId::Right => (1, 0),
+        };
+        // The exposure time from the camera's clock model, not the stamp's arrival jitter.
+        let stamp = self.frame_clocks[this].time(frame.t_ns);
+        let t = match frame.camera {
+            CameraId::Left => stamp,
+            CameraId::Right => stamp.saturating_add_signed(self.clock_offset_ns()),
         };
         // With a rolling shutter the frame's time becomes that of the rows its blobs lie on.
         let t = self.align.push(this, t, frame.blobs, frame.radii);

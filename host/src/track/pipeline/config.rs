@@ -2,6 +2,7 @@
 //! ([`DirectionSource`]).
 
 use crate::stereo::{CorrespondenceConfig, TriangulationMethod};
+use crate::track::frame_clock::FrameTiming;
 use crate::track::fusion::{
     DeadReckonConfig, FusionKind, MagCalibrationConfig, OrientationConfig, ThesisKalmanConfig,
     TipFilterConfig, WorldEstimateConfig, WorldReference,
@@ -63,6 +64,9 @@ pub struct TrackerConfig {
     /// nanoseconds (0: a global shutter). A blob on row `y` was exposed `y` rows after the frame time;
     /// with `time_align` every blob is moved to the pair's time with its image velocity.
     pub row_time_ns: [f64; 2],
+    /// How each camera's frames are timed (left, right): with a known period and stamp noise the frame
+    /// times come from [`crate::track::frame_clock::FrameClock`] instead of the raw stamps.
+    pub frame_timing: [FrameTiming; 2],
     /// A labelling is refused when two of the pen's LEDs image closer than this in either camera,
     /// pixels: the spots overlap (pen pointing at a camera), so which blob is which LED is a guess.
     pub min_image_separation_px: f64,
@@ -134,6 +138,7 @@ impl Default for TrackerConfig {
             right_clock_offset_ns: 0,
             time_align: true,
             row_time_ns: [0.0; 2],
+            frame_timing: [FrameTiming::default(); 2],
             min_image_separation_px: 4.0,
             max_pen_speed_mps: 1.5,
             measured_speed_factor: 2.0,
