@@ -327,6 +327,7 @@ impl Tracker {
     /// `this` at time `t` (left clock).
     fn process_pair(&mut self, this: usize, t: u64) -> TrackSample {
         // Points: this frame's blobs and the other camera's moved to `t`, undistorted.
+        self.align.set_noise_scale(self.pixel_noise.scale());
         self.align.prepare(&self.rig, this, t, &mut self.points);
         // Priors: the fused direction, the previous labels, and the scale error that the time
         // between the pair's two exposures allows.
