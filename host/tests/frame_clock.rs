@@ -78,9 +78,18 @@ fn noise_free_stamps_come_back_exactly() {
 }
 
 #[test]
-fn exact_stamps_or_an_unknown_period_are_used_as_they_are() {
+fn exact_stamps_an_unknown_period_or_a_broken_model_leave_the_stamps_as_they_are() {
     let f = frames(500, 2e5, 1e6, 2, |_| true);
-    for t in [timing(2e5, 0.0), FrameTiming::default()] {
+    for t in [
+        timing(2e5, 0.0),
+        FrameTiming::default(),
+        timing(f64::NAN, 1e6),
+        timing(-1.0, 1e6),
+        FrameTiming {
+            period_ns: f64::INFINITY,
+            ..timing(0.0, 1e6)
+        },
+    ] {
         let mut clock = FrameClock::new(t);
         assert!(f.iter().all(|&(_, s)| clock.time(s) == s));
     }

@@ -30,9 +30,13 @@ pub struct FrameTiming {
 }
 
 impl FrameTiming {
-    /// Whether stamps are to be filtered at all.
+    /// Whether stamps are to be filtered at all: a known period and stamp noise, and finite,
+    /// non-negative figures (a configuration that is not gets the stamps as they are).
     pub fn filters(&self) -> bool {
-        self.period_ns > 0.0 && self.stamp_noise_ns > 0.0
+        let finite = [self.period_ns, self.exposure_jitter_ns, self.stamp_noise_ns]
+            .iter()
+            .all(|x| x.is_finite() && *x >= 0.0);
+        finite && self.period_ns > 0.0 && self.stamp_noise_ns > 0.0
     }
 }
 
