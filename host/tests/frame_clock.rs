@@ -1,24 +1,8 @@
 //! The frame clock: exposure times recovered from jittered host stamps, with the error the
 //! least-squares line predicts, dropped frames and a restarted stream.
 
+use fires_host::rng::SplitMix64;
 use fires_host::track::frame_clock::{FrameClock, FrameTiming};
-
-/// A deterministic normal generator (xorshift64* and Box-Muller).
-struct Normal(u64);
-
-impl Normal {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-
-    fn sample(&mut self) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-}
 
 /// A 60 Hz webcam whose crystal runs 0.1% slow, from a random phase.
 const PERIOD: f64 = 1e9 / 60.0 * 1.001;
@@ -33,12 +17,12 @@ fn frames(
     seed: u64,
     keep: impl Fn(usize) -> bool,
 ) -> Vec<(f64, u64)> {
-    let mut g = Normal(seed);
+    let mut g = SplitMix64::new(seed);
     let phase = 3.3e6;
     (0..n)
         .map(|k| {
-            let t = 5e9 + phase + PERIOD * k as f64 + exposure_ns * g.sample();
-            (t, (t + stamp_ns * g.sample()).round() as u64)
+            let t = 5e9 + phase + PERIOD * k as f64 + exposure_ns * g.gaussian();
+            (t, (t + stamp_ns * g.gaussian()).round() as u64)
         })
         .enumerate()
         .filter(|(k, _)| keep(*k))

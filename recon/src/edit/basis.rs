@@ -40,15 +40,20 @@ impl AffineBasis {
         Ok(())
     }
 
+    /// The component `a` of the targets that parameter `k` moves (`(A − I)_{ab}` or `τ_a`).
+    pub(crate) fn component(k: usize) -> usize {
+        if k < 9 {
+            k / 3
+        } else {
+            k - 9
+        }
+    }
+
     /// The change of a target at `p` per unit of parameter `k`: `p_b` in component `a` for
     /// `(A − I)_{ab}`, 1 in component `a` for `τ_a`.
     pub(crate) fn target_delta(k: usize, p: Vec3) -> Vec3 {
         let mut d = [0.0; 3];
-        if k < 9 {
-            d[k / 3] = p[k % 3];
-        } else {
-            d[k - 9] = 1.0;
-        }
+        d[Self::component(k)] = if k < 9 { p[k % 3] } else { 1.0 };
         Vec3::from_array(d)
     }
 

@@ -255,8 +255,7 @@ impl ImplicitEditor {
             if let Role::Handle(h) = problem.role[l] {
                 let p = problem.handle_target(l, h, self.displaced[l], &identity);
                 for k in 0..AFFINE_PARAMETERS {
-                    let a = if k < 9 { k / 3 } else { k - 9 };
-                    dk[(r, col(h, k))] = AffineBasis::target_delta(k, p)[a];
+                    dk[(r, col(h, k))] = AffineBasis::target_delta(k, p)[AffineBasis::component(k)];
                 }
             }
         }
@@ -280,11 +279,10 @@ impl ImplicitEditor {
             .map(|h| {
                 (0..AFFINE_PARAMETERS)
                     .map(|k| {
-                        let a = if k < 9 { k / 3 } else { k - 9 };
                         (0..problem.len())
                             .map(|l| {
                                 let mut v = [0.0; 3];
-                                v[a] = x[(l, col(h, k))];
+                                v[AffineBasis::component(k)] = x[(l, col(h, k))];
                                 Vec3::from_array(v)
                             })
                             .collect()

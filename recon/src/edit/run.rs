@@ -223,29 +223,40 @@ fn bench_move(p: &EditProblem, k: usize, scale: f64) -> Vec<Similarity> {
 /// Factor time, per-move times, factor entries and the factor's parts of one method.
 type BenchRun = (f64, Vec<f64>, usize, BTreeMap<String, f64>);
 
+/// The time of each of `moves` (at least one) handle moves answered by `solve`, ms.
+fn move_times(
+    p: &EditProblem,
+    moves: usize,
+    scale: f64,
+    mut solve: impl FnMut(&[Similarity]) -> Result<Vec<Vec3>, EditError>,
+) -> Result<Vec<f64>, EditError> {
+    (0..moves.max(1))
+        .map(|k| {
+            let tr = bench_move(p, k + 1, scale);
+            let t = Instant::now();
+            std::hint::black_box(solve(&tr)?);
+            Ok(ms(t))
+        })
+        .collect()
+}
+
+/// One method factored and moved; the factored method is returned for further timings.
 fn bench_method<M: EditMethod>(
     p: &EditProblem,
     o: &M::Options,
     moves: usize,
     scale: f64,
-) -> Result<BenchRun, EditError> {
+) -> Result<(BenchRun, M), EditError> {
     let t = Instant::now();
     let mut m = M::factor(p, o)?;
     let f = ms(t);
-    let mut per = Vec::with_capacity(moves);
-    for k in 0..moves.max(1) {
-        let tr = bench_move(p, k + 1, scale);
-        let t = Instant::now();
-        let x = m.solve(p, &tr)?;
-        per.push(ms(t));
-        std::hint::black_box(x);
-    }
+    let per = move_times(p, moves, scale, |tr| m.solve(p, tr))?;
     let parts = m
         .factor_parts()
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
         .collect();
-    Ok((f, per, m.factor_len(), parts))
+    Ok(((f, per, m.factor_len(), parts), m))
 }
 
 /// `fires bench edit`: one factorisation, then `moves` handle moves; the same ROI's
@@ -289,22 +300,15 @@ pub fn bench_edit(
     let mut per_move_basis_ms = None;
     let (factor_ms, per, entries, factor_parts) = match method {
         Method::Lse => {
-            let r = bench_method::<LseEditor>(&p, &LseOptions::default(), moves, scale)?;
-            let lse = LseEditor::factor(&p, &LseOptions::default())?;
+            let (r, lse) = bench_method::<LseEditor>(&p, &LseOptions::default(), moves, scale)?;
             let t = Instant::now();
             let basis = lse.precompute_basis(&p)?;
             basis_ms = Some(ms(t));
-            let mut per = Vec::new();
-            for k in 0..moves.max(1) {
-                let tr = bench_move(&p, k + 1, scale);
-                let t = Instant::now();
-                std::hint::black_box(basis.combine(&p, &tr)?);
-                per.push(ms(t));
-            }
+            let per = move_times(&p, moves, scale, |tr| basis.combine(&p, tr))?;
             per_move_basis_ms = Some(median(per));
             r
         }
-        Method::Poisson => bench_method::<PoissonEditor>(&p, &Default::default(), moves, scale)?,
+        Method::Poisson => bench_method::<PoissonEditor>(&p, &Default::default(), moves, scale)?.0,
         Method::Implicit => {
             // The drag: first system only, one solve per move, then with the drag basis.
             let options = ImplicitOptions {
@@ -312,21 +316,14 @@ pub fn bench_edit(
                 drag_basis: false,
                 ..Default::default()
             };
-            let r = bench_method::<ImplicitEditor>(&p, &options, moves, scale)?;
-            let mut editor = ImplicitEditor::factor(&p, &options)?;
+            let (r, mut editor) = bench_method::<ImplicitEditor>(&p, &options, moves, scale)?;
             editor.precompute_drag_basis(&p)?;
             basis_ms = Some(editor.drag_basis_ms());
-            let mut per = Vec::new();
-            for k in 0..moves.max(1) {
-                let tr = bench_move(&p, k + 1, scale);
-                let t = Instant::now();
-                std::hint::black_box(editor.solve_drag(&p, &tr)?);
-                per.push(ms(t));
-            }
+            let per = move_times(&p, moves, scale, |tr| editor.solve_drag(&p, tr))?;
             per_move_basis_ms = Some(median(per));
             r
         }
-        Method::Naive => bench_method::<NaiveLaplacian>(&p, &Default::default(), moves, scale)?,
+        Method::Naive => bench_method::<NaiveLaplacian>(&p, &Default::default(), moves, scale)?.0,
     };
     Ok(BenchEditReport {
         method: method.name().into(),

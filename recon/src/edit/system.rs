@@ -470,9 +470,8 @@ impl FactoredQuadratic {
         Ok(self.scatter(rhs.as_ref(), known_delta, None))
     }
 
-    /// `Σ w A_uᵀ W (bₜ − A_k Δx_k)` over the unknowns (minus each term's reference part
-    /// when `with_x0`): the residual is sparse in practice (only moved handles and
-    /// gradient rows), so only its nonzero rows are multiplied.
+    /// `Σ w A_uᵀ W (bₜ − A_k Δx_k)` over the unknowns, minus each term's reference part when
+    /// `with_x0`.
     fn unknown_rhs(
         &self,
         b: &[Option<MatRef<'_, f64>>],

@@ -328,7 +328,8 @@ impl Dissector<'_> {
         }
     }
 
-    /// The rooted level structure of `root` within the part `s` (sets `level`).
+    /// The rooted level structure of `root` within the part `s` (sets each reached node's level in
+    /// `state`).
     fn levels_from(&mut self, root: usize, s: u32) -> Vec<Vec<usize>> {
         let mut levels = vec![vec![root]];
         self.state[root].1 = 0;
@@ -379,7 +380,7 @@ impl Dissector<'_> {
             return Ok(());
         }
         let s = self.mark(nodes);
-        // `level` is free here: it holds each node's index within the leaf.
+        // The level slot is free here: it holds each node's index within the leaf.
         for (i, &v) in nodes.iter().enumerate() {
             self.state[v].1 = i as u32;
         }
