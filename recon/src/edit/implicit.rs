@@ -34,13 +34,18 @@ use super::local::{cotan_stiffness, cotan_weights_at, from_mat, gather};
 use super::problem::{EditProblem, Role};
 use super::session::EditMethod;
 use super::similarity::{mat_vec, polar_rotation, to_na, Mat3, Similarity};
-use super::system::{ms_since, FactoredQuadratic, QuadTerm, RowBuilder};
+use super::system::{ms_since, FactorOrdering, FactoredQuadratic, QuadTerm, RowBuilder};
 use super::EditError;
 use crate::geometry::{triangle_normal, Vec3};
-use crate::solve::{sparse_mul_dense, CholeskyOptions, FixedSolver};
+use crate::solve::{sparse_mul_dense, CholeskyOptions, FixedSolver, OrderingSkeleton, SolveError};
 
 /// Condition number of `VᵢVᵢᵀ` above which a vertex is degenerate (Fu §2.4.3).
 pub const DEGENERATE_COND: f64 = 2e5;
+
+/// How many rings apart the first system's normal matrix couples two vertices: `E_L`'s
+/// rows span a 1-ring (its normal matrix two), the coherence term's a gradient's 1-ring
+/// on each side of a 2-ring pair (four).
+const COUPLING_RINGS: usize = 4;
 
 /// Options of [`ImplicitEditor`].
 #[derive(Debug, Clone, Copy)]
@@ -340,7 +345,11 @@ struct FirstSystem {
 impl FirstSystem {
     /// Degenerate-vertex displacement, gradient fits, the `E_L` and coherence rows, and the
     /// factorisation.
-    fn build(problem: &EditProblem, options: &ImplicitOptions) -> Result<Self, EditError> {
+    fn build(
+        problem: &EditProblem,
+        options: &ImplicitOptions,
+        order: FactorOrdering<'_>,
+    ) -> Result<Self, EditError> {
         let clock = std::time::Instant::now();
         let n = problem.len();
         let n_roi = problem.n_roi;
@@ -444,7 +453,8 @@ impl FirstSystem {
             },
         ];
         let x0 = Mat::from_fn(n, 3, |i, c| x[i][c]);
-        let first = FactoredQuadratic::new(n, terms, &problem.constrained(), Some(x0))?;
+        let first =
+            FactoredQuadratic::with_ordering(n, terms, &problem.constrained(), Some(x0), order)?;
         Ok(Self {
             system: first,
             displaced: x,
@@ -457,6 +467,17 @@ impl FirstSystem {
             ms: ms_since(clock),
         })
     }
+}
+
+/// The first system's elimination order: nested dissection of the free vertices on the
+/// mesh graph, whose separators are [`COUPLING_RINGS`] rings wide
+/// ([`OrderingSkeleton::order_free`]); the normal matrix is not needed.
+fn first_system_order(problem: &EditProblem) -> Result<Vec<usize>, SolveError> {
+    let mut fixed = vec![false; problem.len()];
+    for l in problem.constrained() {
+        fixed[l] = true;
+    }
+    OrderingSkeleton::new(&problem.neighbors, COUPLING_RINGS)?.order_free(&fixed)
 }
 
 /// The shear-removal system (Eq. 2.10): the cotangent stiffness of the original mesh,
@@ -494,11 +515,22 @@ impl EditMethod for ImplicitEditor {
 
     fn factor(problem: &EditProblem, options: &ImplicitOptions) -> Result<Self, EditError> {
         check_singular(problem)?;
-        // The two systems are independent: the second (a cotangent factorisation) is built
-        // on another thread while this one builds the first.
+        // The first system's fill-reducing order needs only the mesh graph, and the second
+        // system is independent of the first: another thread computes the order while
+        // this one builds the first system, then builds the second.
+        let (send, receive) = std::sync::mpsc::channel();
         let (first, second) = std::thread::scope(|scope| {
-            let second = scope.spawn(|| SecondSystem::build(problem));
-            let first = FirstSystem::build(problem, options);
+            let second = scope.spawn(move || {
+                // A closed receiver means the first system failed; its error is reported.
+                let _ = send.send(first_system_order(problem));
+                SecondSystem::build(problem)
+            });
+            let order = FactorOrdering::Given(Box::new(move || {
+                receive.recv().map_err(|_| {
+                    SolveError::Dimension("the ordering thread stopped without an order".into())
+                })?
+            }));
+            let first = FirstSystem::build(problem, options, order);
             let second = second
                 .join()
                 .unwrap_or_else(|panic| std::panic::resume_unwind(panic));

@@ -102,6 +102,9 @@ pub(super) fn fit(x: &[Vec3], stencil: &[usize]) -> (f64, Option<Vec<[f64; 3]>>)
     (cond, Some(q))
 }
 
+/// Entries expected per coherence row (see [`coherence_rows`]).
+const ROW_ESTIMATE: usize = 40;
+
 /// `Qmᵀ (L ⊗ I₃)` (its column `3i + c` is row `3i + c` of `(L ⊗ I₃) Qm`), with `L` the graph Laplacian of the 2-ring pairs: row
 /// `3i + c` is `Σ_k (Qᵢ[:, c] − Q_k[:, c])` over the ROI vertices `k` within two rings of
 /// `i`, each `Qᵢ` spread over its stencil (zero where the gradient is fixed). Summed in one
@@ -114,21 +117,22 @@ pub(super) fn coherence_rows(
 ) -> Result<crate::solve::SparseMatrix, EditError> {
     let n_roi = problem.n_roi;
     let n = problem.len();
+    // Each vertex's 2-ring partners, one flat list (`partner_ptr` delimits vertex i's).
     let mut mark = vec![usize::MAX; n_roi];
-    let mut partners: Vec<Vec<usize>> = vec![Vec::new(); n_roi];
+    let mut partner_ptr = Vec::with_capacity(n_roi + 1);
+    let mut partners = Vec::with_capacity(20 * n_roi);
+    partner_ptr.push(0);
     for i in 0..n_roi {
         mark[i] = i;
         for &j in &problem.neighbors[i] {
             for &k in std::iter::once(&j).chain(problem.neighbors[j].iter()) {
                 if k < n_roi && mark[k] != i {
                     mark[k] = i;
-                    if k > i {
-                        partners[i].push(k);
-                        partners[k].push(i);
-                    }
+                    partners.push(k);
                 }
             }
         }
+        partner_ptr.push(partners.len());
     }
     // Each free gradient's stencil and Qᵢ rows side by side, in one array.
     let mut ptr = Vec::with_capacity(n_roi + 1);
@@ -143,19 +147,13 @@ pub(super) fn coherence_rows(
     let mut acc = vec![[0.0; 3]; n];
     let mut seen = vec![usize::MAX; n];
     let mut touched = Vec::new();
-    // Room for every row: a vertex's stencils overlap, so this bounds the entries.
-    let bound: usize = (0..n_roi)
-        .map(|i| {
-            let own = ptr[i + 1] - ptr[i];
-            own + partners[i]
-                .iter()
-                .map(|&k| ptr[k + 1] - ptr[k])
-                .sum::<usize>()
-        })
-        .sum();
-    let mut rows = RowBuilder::with_capacity(n, 3 * n_roi, 3 * bound.min(n * n_roi));
+    // Room for the rows of a regular mesh (a row spans the 1-rings of a 2-ring: 37
+    // vertices at valence 6); more grows the arrays. An upper bound (the stencils' sizes
+    // summed over the partners) is four times that, and fresh memory is slow to touch.
+    let mut rows = RowBuilder::with_capacity(n, 3 * n_roi, 3 * n_roi * ROW_ESTIMATE);
     let mut entries = Vec::new();
-    for (i, partners_i) in partners.iter().enumerate() {
+    for i in 0..n_roi {
+        let partners_i = &partners[partner_ptr[i]..partner_ptr[i + 1]];
         touched.clear();
         let mut add = |k: usize, f: f64| {
             for &(s, qk) in &flat[ptr[k]..ptr[k + 1]] {

@@ -77,6 +77,17 @@ pub struct FactorTimings {
     pub shared_ms: f64,
 }
 
+/// How a [`FactoredQuadratic`] orders its factor.
+pub enum FactorOrdering<'a> {
+    /// The Cholesky solver's own choice ([`crate::solve::FillOrdering::Auto`]).
+    Auto,
+    /// An elimination order of the `n` entries (fixed ones are skipped; it must hold
+    /// every unknown once), asked for only when the assembled system is analysed, so it
+    /// can be computed on another thread meanwhile (implicit editing's
+    /// [`crate::solve::OrderingSkeleton::order_free`]).
+    Given(Box<dyn FnOnce() -> Result<Vec<usize>, SolveError> + 'a>),
+}
+
 /// Milliseconds elapsed since `t`, the unit every factor timing is reported in.
 pub(crate) fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
@@ -269,6 +280,17 @@ impl FactoredQuadratic {
         known: &[usize],
         x0: Option<Mat<f64>>,
     ) -> Result<Self, SolveError> {
+        Self::with_ordering(n, terms, known, x0, FactorOrdering::Auto)
+    }
+
+    /// [`Self::new`] with the factor's fill-reducing order chosen by `ordering`.
+    pub fn with_ordering(
+        n: usize,
+        terms: Vec<QuadTerm>,
+        known: &[usize],
+        x0: Option<Mat<f64>>,
+        ordering: FactorOrdering<'_>,
+    ) -> Result<Self, SolveError> {
         let mut slot = vec![usize::MAX; n];
         let mut kept = Vec::new();
         for &k in known {
@@ -293,7 +315,20 @@ impl FactoredQuadratic {
         let clock = Instant::now();
         let (parts, gram) = Self::assemble(&slot, unknown.len(), kept.len(), terms, x0.as_ref())?;
         let assemble_ms = ms_since(clock);
-        let mut chol = CholeskySolver::analyze(gram.as_ref(), CholeskyOptions::default())?;
+        let mut chol = match ordering {
+            FactorOrdering::Auto => {
+                CholeskySolver::analyze(gram.as_ref(), CholeskyOptions::default())?
+            }
+            FactorOrdering::Given(order) => {
+                // The given order of all entries, over the unknowns' slots.
+                let nu = unknown.len();
+                let perm: Vec<usize> = order()?
+                    .into_iter()
+                    .filter_map(|v| slot.get(v).copied().filter(|&s| s < nu))
+                    .collect();
+                CholeskySolver::analyze_ordered(gram.as_ref(), CholeskyOptions::default(), &perm)?
+            }
+        };
         let analyze_ms = ms_since(clock) - assemble_ms;
         chol.factorize(gram.as_ref())?;
         let numeric_ms = ms_since(clock) - assemble_ms - analyze_ms;

@@ -115,6 +115,46 @@ impl Default for CholeskyOptions {
     }
 }
 
+/// Fails unless `a` is square.
+fn check_square(a: SparseColMatRef<'_, usize, f64>) -> Result<(), SolveError> {
+    if a.nrows() != a.ncols() {
+        return Err(SolveError::Dimension(format!(
+            "{}x{} matrix is not square",
+            a.nrows(),
+            a.ncols()
+        )));
+    }
+    Ok(())
+}
+
+/// faer's symbolic parameters for `options.mode`.
+fn symbolic_params(options: CholeskyOptions) -> CholeskySymbolicParams<'static> {
+    let mut params = CholeskySymbolicParams::default();
+    params.supernodal_flop_ratio_threshold = match options.mode {
+        FactorMode::Auto => params.supernodal_flop_ratio_threshold,
+        FactorMode::Simplicial => SupernodalThreshold::FORCE_SIMPLICIAL,
+        FactorMode::Supernodal => SupernodalThreshold::FORCE_SUPERNODAL,
+    };
+    params
+}
+
+/// Symbolic analysis of `a`'s pattern in the elimination order `fwd` (`fwd[k]` eliminated
+/// `k`-th).
+fn symbolic_ordered(
+    a: SparseColMatRef<'_, usize, f64>,
+    options: CholeskyOptions,
+    fwd: &[usize],
+) -> Result<SymbolicCholesky<usize>, SolveError> {
+    let n = a.nrows();
+    let mut inv = vec![0usize; n];
+    for (k, &i) in fwd.iter().enumerate() {
+        inv[i] = k;
+    }
+    let perm = SymmetricOrdering::Custom(PermRef::new_checked(fwd, &inv, n));
+    factorize_symbolic_cholesky(a.symbolic(), options.side, perm, symbolic_params(options))
+        .map_err(|_| SolveError::OutOfMemory)
+}
+
 /// A symmetric sparse factorisation: [`Self::analyze`] once per pattern,
 /// [`Self::factorize`] per set of values, [`Self::solve_in_place`] per right-hand side.
 #[derive(Debug, Clone)]
@@ -133,19 +173,8 @@ impl CholeskySolver {
         a: SparseColMatRef<'_, usize, f64>,
         options: CholeskyOptions,
     ) -> Result<Self, SolveError> {
-        if a.nrows() != a.ncols() {
-            return Err(SolveError::Dimension(format!(
-                "{}x{} matrix is not square",
-                a.nrows(),
-                a.ncols()
-            )));
-        }
-        let mut params = CholeskySymbolicParams::default();
-        params.supernodal_flop_ratio_threshold = match options.mode {
-            FactorMode::Auto => params.supernodal_flop_ratio_threshold,
-            FactorMode::Simplicial => SupernodalThreshold::FORCE_SIMPLICIAL,
-            FactorMode::Supernodal => SupernodalThreshold::FORCE_SUPERNODAL,
-        };
+        check_square(a)?;
+        let params = symbolic_params(options);
         let n = a.nrows();
         let symbolic_with = |nd: bool| -> Result<SymbolicCholesky<usize>, SolveError> {
             if !nd {
@@ -157,14 +186,7 @@ impl CholeskySolver {
                 )
                 .map_err(|_| SolveError::OutOfMemory);
             }
-            let fwd = nested_dissection(a.symbolic())?;
-            let mut inv = vec![0usize; n];
-            for (k, &i) in fwd.iter().enumerate() {
-                inv[i] = k;
-            }
-            let perm = SymmetricOrdering::Custom(PermRef::new_checked(&fwd, &inv, n));
-            factorize_symbolic_cholesky(a.symbolic(), options.side, perm, params)
-                .map_err(|_| SolveError::OutOfMemory)
+            symbolic_ordered(a, options, &nested_dissection(a.symbolic())?)
         };
         let symbolic = match options.ordering {
             FillOrdering::Amd => symbolic_with(false)?,
@@ -189,14 +211,51 @@ impl CholeskySolver {
                 }
             }
         };
-        Ok(Self {
+        Ok(Self::from_symbolic(a, options, symbolic))
+    }
+
+    /// Symbolic analysis in the elimination order `order` (`order[k]` eliminated `k`-th,
+    /// e.g. from [`super::OrderingSkeleton::order_free`]), whatever `options.ordering`
+    /// says. Fails unless `order` is a permutation of the unknowns.
+    pub fn analyze_ordered(
+        a: SparseColMatRef<'_, usize, f64>,
+        options: CholeskyOptions,
+        order: &[usize],
+    ) -> Result<Self, SolveError> {
+        check_square(a)?;
+        let n = a.nrows();
+        let mut seen = vec![false; n];
+        if order.len() != n {
+            return Err(SolveError::Dimension(format!(
+                "an order of {} unknowns for a {n}x{n} matrix",
+                order.len()
+            )));
+        }
+        for &i in order {
+            if i >= n || std::mem::replace(&mut seen[i], true) {
+                return Err(SolveError::IndexOutOfRange { index: i, size: n });
+            }
+        }
+        Ok(Self::from_symbolic(
+            a,
+            options,
+            symbolic_ordered(a, options, order)?,
+        ))
+    }
+
+    fn from_symbolic(
+        a: SparseColMatRef<'_, usize, f64>,
+        options: CholeskyOptions,
+        symbolic: SymbolicCholesky<usize>,
+    ) -> Self {
+        Self {
             symbolic: Arc::new(symbolic),
             col_ptr: a.col_ptr().to_vec(),
             row_idx: a.row_idx().to_vec(),
             options,
             values: Vec::new(),
             factored: false,
-        })
+        }
     }
 
     /// Analysis followed by numeric factorisation.

@@ -32,7 +32,7 @@ pub use cholesky::{
 pub use error::SolveError;
 pub use fixed::FixedSolver;
 pub use least_squares::LeastSquaresSolver;
-pub use ordering::nested_dissection;
+pub use ordering::{nested_dissection, OrderingSkeleton};
 pub use sparse::{
     lower_product_sum, sparse_from_triplets, sparse_mul_dense, sparse_triplets, transpose,
     weighted_gram, ProductTerm, SparseMatrix,

@@ -16,6 +16,17 @@
 //! 216M), and a solve, bounded by reading the factor, shrinks with it. It is within 8% of
 //! METIS's `NodeND` there; on square grids, whose level sets run diagonally, AMD is 10%
 //! smaller, which is why `FillOrdering::Auto` keeps the smaller of the two.
+//!
+//! [`OrderingSkeleton::order_free`] finds the same separators on a much sparser graph the
+//! caller knows, before the matrix exists: when every entry of the matrix joins unknowns at
+//! most `band` steps apart in the skeleton (a mesh's 1-ring graph for an operator over
+//! `band` rings), `band` consecutive levels of a level structure of the skeleton separate
+//! the matrix's graph as one level of its own would. The level structures, which are most
+//! of the cost, then visit the skeleton's few edges instead of the matrix's many (implicit
+//! Laplacian editing's 4-ring system has about ten times as many), and the matrix's graph,
+//! needed only to trim each separator and to order the leaves, is taken to be every pair
+//! within `band` steps. Needing no matrix, the order can be computed on another thread
+//! while the matrix is assembled.
 
 use std::collections::HashMap;
 
@@ -40,6 +51,7 @@ const BALANCE: (f64, f64) = (0.35, 0.65);
 const UNSEEN: u32 = u32::MAX;
 
 /// Symmetric adjacency (no self loops) of the compressed graph, with node weights.
+#[derive(Debug, Clone)]
 struct Graph {
     xadj: Vec<usize>,
     adj: Vec<usize>,
@@ -64,6 +76,8 @@ pub fn nested_dissection(a: SymbolicSparseColMatRef<'_, usize>) -> Result<Vec<us
     let (full, members) = compress(symmetric_pattern(a));
     let mut d = Dissector {
         g: &full,
+        full: &full,
+        band: 1,
         state: vec![(0, UNSEEN); full.len()],
         next_stamp: 0,
     };
@@ -75,6 +89,148 @@ pub fn nested_dissection(a: SymbolicSparseColMatRef<'_, usize>) -> Result<Vec<us
     }
     debug_assert_eq!(perm.len(), n);
     Ok(perm)
+}
+
+/// A sparse graph over a matrix's unknowns whose level structures stand in for the
+/// matrix's own in nested dissection ([`Self::order_free`]): every off-diagonal entry of
+/// the matrix joins two unknowns at most `band` steps apart in it.
+#[derive(Debug, Clone)]
+pub struct OrderingSkeleton {
+    graph: Graph,
+    band: usize,
+}
+
+impl OrderingSkeleton {
+    /// The skeleton with `neighbors[v]` adjacent to `v` (made symmetric; self loops and
+    /// repeats ignored) and the matrix's coupling reach `band ≥ 1`. Fails on a neighbour
+    /// out of range.
+    pub fn new(neighbors: &[Vec<usize>], band: usize) -> Result<Self, SolveError> {
+        let n = neighbors.len();
+        let mut count = vec![0usize; n + 1];
+        for (v, list) in neighbors.iter().enumerate() {
+            for &u in list {
+                if u >= n {
+                    return Err(SolveError::IndexOutOfRange { index: u, size: n });
+                }
+                if u != v {
+                    count[u] += 1;
+                    count[v] += 1;
+                }
+            }
+        }
+        let mut xadj = vec![0usize; n + 1];
+        for v in 0..n {
+            xadj[v + 1] = xadj[v] + count[v];
+        }
+        let mut fill = xadj.clone();
+        let mut adj = vec![0usize; xadj[n]];
+        for (v, list) in neighbors.iter().enumerate() {
+            for &u in list.iter().filter(|&&u| u != v) {
+                adj[fill[u]] = v;
+                fill[u] += 1;
+                adj[fill[v]] = u;
+                fill[v] += 1;
+            }
+        }
+        Ok(Self {
+            graph: sorted_unique(n, xadj, adj),
+            band: band.max(1),
+        })
+    }
+
+    /// Number of unknowns.
+    pub fn len(&self) -> usize {
+        self.graph.len()
+    }
+
+    /// True for a skeleton over no unknowns.
+    pub fn is_empty(&self) -> bool {
+        self.graph.len() == 0
+    }
+
+    /// The nested-dissection elimination order of the free nodes (`!fixed[v]`) of a matrix
+    /// whose entries join nodes at most `band` steps apart in the skeleton (through any
+    /// node, fixed or free), as node indices, first eliminated first. Separators are bands
+    /// of levels of the skeleton among the free nodes; the matrix's graph is taken to join
+    /// every two free nodes within `band` steps. Any skeleton gives a valid order; one that
+    /// understates the matrix's reach only makes the factor larger.
+    pub fn order_free(&self, fixed: &[bool]) -> Result<Vec<usize>, SolveError> {
+        let n = self.len();
+        if fixed.len() != n {
+            return Err(SolveError::Dimension(format!(
+                "{} fixed flags for a skeleton over {n} nodes",
+                fixed.len()
+            )));
+        }
+        let free: Vec<usize> = (0..n).filter(|&v| !fixed[v]).collect();
+        let mut local = vec![usize::MAX; n];
+        for (i, &v) in free.iter().enumerate() {
+            local[v] = i;
+        }
+        let g = &self.graph;
+        // The skeleton among the free nodes (renumbering is monotone: lists stay sorted).
+        let mut xadj = Vec::with_capacity(free.len() + 1);
+        let mut adj = Vec::new();
+        xadj.push(0);
+        for &v in &free {
+            adj.extend(
+                g.neighbors(v)
+                    .iter()
+                    .filter_map(|&u| (local[u] != usize::MAX).then_some(local[u])),
+            );
+            xadj.push(adj.len());
+        }
+        let levels = Graph {
+            xadj,
+            adj,
+            weight: vec![1; free.len()],
+        };
+        // The free nodes within `band` steps of each free node, by a bounded search.
+        let mut xadj = Vec::with_capacity(free.len() + 1);
+        let mut adj = Vec::new();
+        xadj.push(0);
+        let mut seen = vec![usize::MAX; n];
+        let (mut frontier, mut next) = (Vec::new(), Vec::new());
+        for (i, &v) in free.iter().enumerate() {
+            let start = adj.len();
+            seen[v] = i;
+            frontier.clear();
+            frontier.push(v);
+            for _ in 0..self.band {
+                next.clear();
+                for &u in &frontier {
+                    for &x in g.neighbors(u) {
+                        if seen[x] != i {
+                            seen[x] = i;
+                            next.push(x);
+                            if local[x] != usize::MAX {
+                                adj.push(local[x]);
+                            }
+                        }
+                    }
+                }
+                std::mem::swap(&mut frontier, &mut next);
+            }
+            adj[start..].sort_unstable();
+            xadj.push(adj.len());
+        }
+        let coupling = Graph {
+            xadj,
+            adj,
+            weight: vec![1; free.len()],
+        };
+        let mut d = Dissector {
+            g: &levels,
+            full: &coupling,
+            band: self.band,
+            state: vec![(0, UNSEEN); free.len()],
+            next_stamp: 0,
+        };
+        let mut order = Vec::with_capacity(free.len());
+        d.dissect((0..free.len()).collect(), &mut order)?;
+        debug_assert_eq!(order.len(), free.len());
+        Ok(order.into_iter().map(|i| free[i]).collect())
+    }
 }
 
 /// Both triangles of `a`'s pattern, sorted, without the diagonal, as a graph of unit
@@ -106,7 +262,12 @@ fn symmetric_pattern(a: SymbolicSparseColMatRef<'_, usize>) -> Graph {
             }
         }
     }
-    // Sort and deduplicate each list in place, compacting.
+    sorted_unique(n, xadj, adj)
+}
+
+/// The graph of adjacency lists `adj[xadj[v]..xadj[v + 1]]`, each sorted and deduplicated
+/// in place, with unit weights.
+fn sorted_unique(n: usize, mut xadj: Vec<usize>, mut adj: Vec<usize>) -> Graph {
     let mut out = 0;
     let mut start = 0;
     for v in 0..n {
@@ -212,7 +373,13 @@ fn compress(g: Graph) -> (Graph, Vec<Vec<usize>>) {
 }
 
 struct Dissector<'g> {
+    /// The graph whose level structures give the separators.
     g: &'g Graph,
+    /// The matrix's graph: separators are trimmed and leaves ordered on it (`g` itself
+    /// unless a skeleton stands in).
+    full: &'g Graph,
+    /// How many consecutive levels of `g` a separator spans.
+    band: usize,
     /// Per node: the stamp of the part it was last marked in (membership of the part being
     /// processed is `state[v].0 == current`) and its BFS level within that part
     /// ([`UNSEEN`] before the search reaches it); side by side, since a search reads both.
@@ -261,20 +428,22 @@ impl Dissector<'_> {
             return Ok(());
         }
         let levels = self.peripheral_levels(first, s);
-        if levels.len() < 3 {
+        let band = self.band;
+        if levels.len() < band + 2 {
             return self.leaf(&nodes, out);
         }
         let total = self.weight(&nodes);
         let k = self.balanced_cut(&levels, total);
-        // Separator nodes with no neighbour beyond it belong to the near side.
+        // Separator nodes with no neighbour beyond it (in the matrix's graph) belong to the
+        // near side.
         let mut near: Vec<usize> = levels[..k].concat();
         let mut sep = Vec::new();
-        for &v in &levels[k] {
-            let touches_far = self
-                .g
-                .neighbors(v)
-                .iter()
-                .any(|&u| self.state[u] == (s, (k + 1) as u32));
+        let far_level = (k + band) as u32;
+        for &v in levels[k..k + band].iter().flatten() {
+            let touches_far = self.full.neighbors(v).iter().any(|&u| {
+                let (stamp, level) = self.state[u];
+                stamp == s && level >= far_level && level != UNSEEN
+            });
             if touches_far {
                 sep.push(v);
             } else {
@@ -284,32 +453,40 @@ impl Dissector<'_> {
         // The far side starts from its last level, which holds a peripheral node of that
         // side (the near side starts from this part's root): the child's first level
         // structure then usually needs no pseudo-peripheral restart.
-        let far: Vec<usize> = levels[k + 1..].iter().rev().flatten().copied().collect();
+        let far: Vec<usize> = levels[k + band..].iter().rev().flatten().copied().collect();
         self.dissect(near, out)?;
         self.dissect(far, out)?;
         out.extend_from_slice(&sep);
         Ok(())
     }
 
-    /// The level whose removal splits `levels` most evenly-and-lightly: the lightest level
-    /// whose preceding weight is within [`BALANCE`] of `total`, else the median level.
+    /// The first of [`Self::band`] consecutive levels whose removal splits `levels` most
+    /// evenly-and-lightly: the lightest window whose preceding weight is within
+    /// [`BALANCE`] of `total`, else the window at the median.
     fn balanced_cut(&self, levels: &[Vec<usize>], total: usize) -> usize {
+        let band = self.band;
+        let weights: Vec<usize> = levels.iter().map(|l| self.weight(l)).collect();
         let total = total as f64;
         let mut before = 0usize;
+        let mut window: usize = weights[1..=band].iter().sum();
         let mut best: Option<(usize, usize)> = None;
         let mut half: Option<usize> = None;
-        for (k, l) in levels.iter().enumerate().take(levels.len() - 1).skip(1) {
-            before += self.weight(&levels[k - 1]);
+        for k in 1..levels.len() - band {
+            before += weights[k - 1];
+            if k > 1 {
+                window = window + weights[k + band - 1] - weights[k - 1];
+            }
             let f = before as f64 / total;
-            let w = self.weight(l);
-            if half.is_none() && f + w as f64 / total >= 0.5 {
+            if half.is_none() && f + window as f64 / total >= 0.5 {
                 half = Some(k);
             }
-            if f >= BALANCE.0 && f <= BALANCE.1 && best.is_none_or(|(_, bw)| w < bw) {
-                best = Some((k, w));
+            if f >= BALANCE.0 && f <= BALANCE.1 && best.is_none_or(|(_, bw)| window < bw) {
+                best = Some((k, window));
             }
         }
-        best.map(|b| b.0).or(half).unwrap_or(levels.len() / 2)
+        best.map(|b| b.0)
+            .or(half)
+            .unwrap_or(((levels.len() + 1 - band) / 2).max(1))
     }
 
     fn clear_levels(&mut self, levels: &[Vec<usize>]) {
@@ -390,7 +567,7 @@ impl Dissector<'_> {
         for &v in nodes {
             let start = row_idx.len();
             row_idx.extend(
-                self.g
+                self.full
                     .neighbors(v)
                     .iter()
                     .filter(|&&u| self.state[u].0 == s)

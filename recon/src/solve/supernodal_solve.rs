@@ -119,18 +119,42 @@ pub(crate) fn forward_supernodal_llt(
     b: MatRef<'_, f64>,
 ) -> Option<Mat<f64>> {
     let nodes = supernodes(symbolic, values)?;
-    let n = b.nrows();
-    let mut out = Mat::zeros(n, b.ncols());
-    for c in 0..b.ncols() {
-        let mut w: Vec<[f64; 1]> = (0..n)
-            .map(|k| [b[(symbolic.perm().map_or(k, |p| p.arrays().0[k]), c)]])
-            .collect();
-        forward(&nodes, &mut w);
-        for (k, v) in w.iter().enumerate() {
-            out[(k, c)] = v[0];
+    let mut out = Mat::zeros(b.nrows(), b.ncols());
+    let mut col = 0;
+    while col < b.ncols() {
+        let k = (b.ncols() - col).min(4);
+        match k {
+            1 => forward_columns::<1>(symbolic, &nodes, b, col, out.as_mut()),
+            2 => forward_columns::<2>(symbolic, &nodes, b, col, out.as_mut()),
+            3 => forward_columns::<3>(symbolic, &nodes, b, col, out.as_mut()),
+            _ => forward_columns::<4>(symbolic, &nodes, b, col, out.as_mut()),
         }
+        col += k;
     }
     Some(out)
+}
+
+/// Columns `col..col + K` of [`forward_supernodal_llt`], in one sweep over the factor.
+fn forward_columns<const K: usize>(
+    symbolic: &SymbolicCholesky<usize>,
+    nodes: &[Supernode<'_>],
+    b: MatRef<'_, f64>,
+    col: usize,
+    mut out: MatMut<'_, f64>,
+) {
+    let fwd = symbolic.perm().map(|p| p.arrays().0);
+    let mut w: Vec<[f64; K]> = (0..b.nrows())
+        .map(|k| {
+            let i = fwd.map_or(k, |f| f[k]);
+            std::array::from_fn(|c| b[(i, col + c)])
+        })
+        .collect();
+    forward(nodes, &mut w);
+    for (k, v) in w.iter().enumerate() {
+        for (c, &x) in v.iter().enumerate() {
+            out[(k, col + c)] = x;
+        }
+    }
 }
 
 /// Solves `L Lᵀ y = w` in place for `K` interleaved right-hand sides whose rows are already
