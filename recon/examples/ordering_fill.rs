@@ -1,6 +1,8 @@
 //! Factor size and analysis time of AMD and nested dissection on editing-shaped systems:
-//! the cotangent pattern (1-ring, one unknown per vertex) and the LSE pattern (2-ring,
-//! dense 3×3 blocks) of a geodesic ball on an icosphere.
+//! the cotangent pattern (1-ring, one unknown per vertex), the LSE pattern (2-ring,
+//! dense 3×3 blocks) and the implicit-editing pattern (4-ring, one unknown per vertex,
+//! also ordered by nested dissection on the mesh graph, `OrderingSkeleton`) of a geodesic
+//! ball on an icosphere.
 //!
 //! `cargo run --release -p fires-recon --example ordering_fill -- 100000`
 
@@ -9,6 +11,7 @@ use std::time::Instant;
 use fires_recon::generate::icosphere;
 use fires_recon::solve::{
     sparse_from_triplets, CholeskyOptions, CholeskySolver, FactorMode, FillOrdering,
+    OrderingSkeleton,
 };
 
 fn main() {
@@ -71,7 +74,41 @@ fn main() {
             }
         }
     }
-    for (name, n, t) in [("cotan", roi, cot), ("lse", 3 * roi, lse)] {
+    let mut four_ring = ring.clone();
+    for _ in 1..4 {
+        four_ring = four_ring
+            .iter()
+            .map(|r| {
+                let mut s: Vec<usize> = r.iter().flat_map(|&u| ring[u].iter().copied()).collect();
+                s.sort_unstable();
+                s.dedup();
+                s
+            })
+            .collect();
+    }
+    let mut implicit = Vec::new();
+    for (i, r) in four_ring.iter().enumerate() {
+        implicit.extend(r.iter().filter(|&&j| j <= i).map(|&j| (i, j, 1.0)));
+    }
+    {
+        let a = sparse_from_triplets(roi, roi, &implicit).expect("valid triplets");
+        let t0 = Instant::now();
+        let order = OrderingSkeleton::new(&ring, 4)
+            .and_then(|s| s.order_free(&vec![false; roi]))
+            .expect("skeleton order");
+        let s = CholeskySolver::analyze_ordered(a.as_ref(), CholeskyOptions::default(), &order)
+            .expect("analysis");
+        println!(
+            "{{\"pattern\":\"implicit\",\"unknowns\":{roi},\"ordering\":\"Skeleton\",\"factor_entries\":{},\"analyze_ms\":{:.1}}}",
+            s.factor_len(),
+            t0.elapsed().as_secs_f64() * 1e3
+        );
+    }
+    for (name, n, t) in [
+        ("cotan", roi, cot),
+        ("lse", 3 * roi, lse),
+        ("implicit", roi, implicit),
+    ] {
         let a = sparse_from_triplets(n, n, &t).expect("valid triplets");
         for ordering in [FillOrdering::Amd, FillOrdering::NestedDissection] {
             let opts = CholeskyOptions {
