@@ -34,8 +34,9 @@ use super::local::{cotan_stiffness, cotan_weights_at, from_mat, gather};
 use super::problem::{EditProblem, Role};
 use super::session::EditMethod;
 use super::similarity::{mat_vec, polar_rotation, to_na, Mat3, Similarity};
-use super::system::{ms_since, FactorOrdering, FactoredQuadratic, QuadTerm, RowBuilder};
+use super::system::{ms_since, FactorOrdering, FactoredQuadratic, QuadTerm};
 use super::EditError;
+use super::RowBuilder;
 use crate::geometry::{triangle_normal, Vec3};
 use crate::solve::{sparse_mul_dense, CholeskyOptions, FixedSolver, OrderingSkeleton, SolveError};
 

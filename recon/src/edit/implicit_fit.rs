@@ -7,8 +7,8 @@ use nalgebra::Matrix3;
 
 use super::problem::EditProblem;
 use super::similarity::to_na;
-use super::system::RowBuilder;
 use super::EditError;
+use super::RowBuilder;
 use crate::geometry::Vec3;
 
 /// The smallest and largest eigenvalue of a symmetric 3×3 matrix, in closed form (the

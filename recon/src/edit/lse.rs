@@ -24,8 +24,9 @@ use super::basis::{AffineBasis, AFFINE_PARAMETERS};
 use super::problem::{EditProblem, Role};
 use super::session::EditMethod;
 use super::similarity::{mat_vec, rotation_from_vector, Mat3, Similarity};
-use super::system::{FactoredQuadratic, QuadTerm, RowBuilder};
+use super::system::{FactoredQuadratic, QuadTerm};
 use super::EditError;
+use super::RowBuilder;
 use crate::geometry::Vec3;
 
 /// Options of [`LseEditor`].
