@@ -69,7 +69,8 @@ pub struct FactoredQuadratic {
 pub struct FactorTimings {
     /// Splitting the terms and forming the lower triangle of the normal matrix.
     pub assemble_ms: f64,
-    /// Fill-reducing ordering and symbolic analysis.
+    /// Fill-reducing ordering and symbolic analysis (with [`FactorOrdering::Given`], any
+    /// wait for the order and the symbolic analysis).
     pub analyze_ms: f64,
     /// Numeric Cholesky factorisation.
     pub numeric_ms: f64,
