@@ -45,15 +45,18 @@ fn main() {
             r
         })
         .collect();
-    let two_ring: Vec<Vec<usize>> = ring
-        .iter()
-        .map(|r| {
-            let mut s: Vec<usize> = r.iter().flat_map(|&u| ring[u].iter().copied()).collect();
-            s.sort_unstable();
-            s.dedup();
-            s
-        })
-        .collect();
+    // One more ring around every vertex's neighbourhood.
+    let grow = |near: &[Vec<usize>]| -> Vec<Vec<usize>> {
+        near.iter()
+            .map(|r| {
+                let mut s: Vec<usize> = r.iter().flat_map(|&u| ring[u].iter().copied()).collect();
+                s.sort_unstable();
+                s.dedup();
+                s
+            })
+            .collect()
+    };
+    let two_ring = grow(&ring);
     let mut cot = Vec::new();
     for (i, r) in ring.iter().enumerate() {
         for &j in r {
@@ -74,18 +77,7 @@ fn main() {
             }
         }
     }
-    let mut four_ring = ring.clone();
-    for _ in 1..4 {
-        four_ring = four_ring
-            .iter()
-            .map(|r| {
-                let mut s: Vec<usize> = r.iter().flat_map(|&u| ring[u].iter().copied()).collect();
-                s.sort_unstable();
-                s.dedup();
-                s
-            })
-            .collect();
-    }
+    let four_ring = grow(&grow(&two_ring));
     let mut implicit = Vec::new();
     for (i, r) in four_ring.iter().enumerate() {
         implicit.extend(r.iter().filter(|&&j| j <= i).map(|&j| (i, j, 1.0)));

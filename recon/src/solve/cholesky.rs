@@ -224,13 +224,13 @@ impl CholeskySolver {
     ) -> Result<Self, SolveError> {
         check_square(a)?;
         let n = a.nrows();
-        let mut seen = vec![false; n];
         if order.len() != n {
             return Err(SolveError::Dimension(format!(
                 "an order of {} unknowns for a {n}x{n} matrix",
                 order.len()
             )));
         }
+        let mut seen = vec![false; n];
         for &i in order {
             if i >= n || std::mem::replace(&mut seen[i], true) {
                 return Err(SolveError::IndexOutOfRange { index: i, size: n });

@@ -106,34 +106,18 @@ impl OrderingSkeleton {
     /// out of range.
     pub fn new(neighbors: &[Vec<usize>], band: usize) -> Result<Self, SolveError> {
         let n = neighbors.len();
-        let mut count = vec![0usize; n + 1];
-        for (v, list) in neighbors.iter().enumerate() {
-            for &u in list {
-                if u >= n {
-                    return Err(SolveError::IndexOutOfRange { index: u, size: n });
-                }
-                if u != v {
-                    count[u] += 1;
-                    count[v] += 1;
+        if let Some(&u) = neighbors.iter().flatten().find(|&&u| u >= n) {
+            return Err(SolveError::IndexOutOfRange { index: u, size: n });
+        }
+        let graph = symmetric_graph(n, |edge| {
+            for (v, list) in neighbors.iter().enumerate() {
+                for &u in list.iter().filter(|&&u| u != v) {
+                    edge(u, v);
                 }
             }
-        }
-        let mut xadj = vec![0usize; n + 1];
-        for v in 0..n {
-            xadj[v + 1] = xadj[v] + count[v];
-        }
-        let mut fill = xadj.clone();
-        let mut adj = vec![0usize; xadj[n]];
-        for (v, list) in neighbors.iter().enumerate() {
-            for &u in list.iter().filter(|&&u| u != v) {
-                adj[fill[u]] = v;
-                fill[u] += 1;
-                adj[fill[v]] = u;
-                fill[v] += 1;
-            }
-        }
+        });
         Ok(Self {
-            graph: sorted_unique(n, xadj, adj),
+            graph,
             band: band.max(1),
         })
     }
@@ -237,31 +221,35 @@ impl OrderingSkeleton {
 /// weights.
 fn symmetric_pattern(a: SymbolicSparseColMatRef<'_, usize>) -> Graph {
     let n = a.ncols();
-    let mut count = vec![0usize; n + 1];
-    for j in 0..n {
-        for i in a.row_idx_of_col(j) {
-            if i != j && i < n {
-                count[i] += 1;
-                count[j] += 1;
+    symmetric_graph(n, |edge| {
+        for j in 0..n {
+            for i in a.row_idx_of_col(j).filter(|&i| i != j && i < n) {
+                edge(i, j);
             }
         }
-    }
+    })
+}
+
+/// The symmetric graph over `n` nodes of the edges `edges` reports (each `u != v`, both
+/// below `n`; it is called twice, to count and to fill), lists sorted and deduplicated.
+fn symmetric_graph(n: usize, edges: impl Fn(&mut dyn FnMut(usize, usize))) -> Graph {
+    let mut count = vec![0usize; n];
+    edges(&mut |u, v| {
+        count[u] += 1;
+        count[v] += 1;
+    });
     let mut xadj = vec![0usize; n + 1];
     for v in 0..n {
         xadj[v + 1] = xadj[v] + count[v];
     }
     let mut fill = xadj.clone();
     let mut adj = vec![0usize; xadj[n]];
-    for j in 0..n {
-        for i in a.row_idx_of_col(j) {
-            if i != j && i < n {
-                adj[fill[i]] = j;
-                fill[i] += 1;
-                adj[fill[j]] = i;
-                fill[j] += 1;
-            }
-        }
-    }
+    edges(&mut |u, v| {
+        adj[fill[u]] = v;
+        fill[u] += 1;
+        adj[fill[v]] = u;
+        fill[v] += 1;
+    });
     sorted_unique(n, xadj, adj)
 }
 
