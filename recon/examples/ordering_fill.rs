@@ -8,54 +8,23 @@
 
 use std::time::Instant;
 
-use fires_recon::generate::icosphere;
 use fires_recon::solve::{
     sparse_from_triplets, CholeskyOptions, CholeskySolver, FactorMode, FillOrdering,
     OrderingSkeleton,
 };
+
+#[path = "common/ball.rs"]
+mod ball;
+
+use ball::{ball_rings, grow};
 
 fn main() {
     let roi: usize = std::env::args()
         .nth(1)
         .and_then(|a| a.parse().ok())
         .unwrap_or(30_000);
-    let mut level = 1;
-    while 10 * 4usize.pow(level) + 2 < roi * 5 / 4 {
-        level += 1;
-    }
-    let mesh = icosphere(level, 1.0);
-    let seed = mesh.vertices().next().expect("icosphere has vertices");
-    let d = fires_recon::operators::geodesic_dijkstra(&mesh, &[seed]).expect("connected");
-    let mut order: Vec<usize> = mesh.vertices().map(|v| v.idx()).collect();
-    order.sort_by(|&a, &b| d[a].total_cmp(&d[b]));
-    let mut local = vec![usize::MAX; mesh.n_vertices()];
-    for (l, &v) in order[..roi].iter().enumerate() {
-        local[v] = l;
-    }
-    let ring: Vec<Vec<usize>> = order[..roi]
-        .iter()
-        .map(|&v| {
-            let mut r: Vec<usize> = mesh
-                .vertex_vertices(fires_recon::mesh::Vertex::new(v))
-                .map(|u| local[u.idx()])
-                .filter(|&u| u != usize::MAX)
-                .collect();
-            r.push(local[v]);
-            r.sort_unstable();
-            r
-        })
-        .collect();
-    // One more ring around every vertex's neighbourhood.
-    let grow = |near: &[Vec<usize>]| -> Vec<Vec<usize>> {
-        near.iter()
-            .map(|r| {
-                let mut s: Vec<usize> = r.iter().flat_map(|&u| ring[u].iter().copied()).collect();
-                s.sort_unstable();
-                s.dedup();
-                s
-            })
-            .collect()
-    };
+    let ring = ball_rings(roi);
+    let grow = |near: &[Vec<usize>]| grow(&ring, near);
     let two_ring = grow(&ring);
     let mut cot = Vec::new();
     for (i, r) in ring.iter().enumerate() {

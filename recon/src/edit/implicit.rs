@@ -38,7 +38,9 @@ use super::system::{ms_since, FactorOrdering, FactoredQuadratic, QuadTerm};
 use super::EditError;
 use super::RowBuilder;
 use crate::geometry::{triangle_normal, Vec3};
-use crate::solve::{sparse_mul_dense, CholeskyOptions, FixedSolver, OrderingSkeleton, SolveError};
+use crate::solve::{
+    sparse_mul_dense, CholeskyOptions, FixedSolver, OrderingSkeleton, SolveError, SubtreeThreads,
+};
 
 /// Condition number of `VᵢVᵢᵀ` above which a vertex is degenerate (Fu §2.4.3).
 pub const DEGENERATE_COND: f64 = 2e5;
@@ -63,6 +65,9 @@ pub struct ImplicitOptions {
     /// factoring ([`AffineBasis`]), so a drag costs vector updates instead of a solve
     /// (transform handles only; a one-shot edit turns it off).
     pub drag_basis: bool,
+    /// Where the first system's factor uses a second thread: by default its numeric
+    /// factorisation; [`SubtreeThreads::FactorAndSolve`] also every drag's solve.
+    pub threads: SubtreeThreads,
 }
 
 impl Default for ImplicitOptions {
@@ -73,6 +78,7 @@ impl Default for ImplicitOptions {
             second_solve: true,
             scale_features: false,
             drag_basis: true,
+            threads: SubtreeThreads::Factor,
         }
     }
 }
@@ -454,8 +460,14 @@ impl FirstSystem {
             },
         ];
         let x0 = Mat::from_fn(n, 3, |i, c| x[i][c]);
-        let first =
-            FactoredQuadratic::with_ordering(n, terms, &problem.constrained(), Some(x0), order)?;
+        let first = FactoredQuadratic::with_ordering(
+            n,
+            terms,
+            &problem.constrained(),
+            Some(x0),
+            order,
+            options.threads,
+        )?;
         Ok(Self {
             system: first,
             displaced: x,

@@ -19,7 +19,7 @@ use super::spec::{EditSpec, HandleSpec, Select, TransformSpec};
 use super::{detail_error, EditError};
 use crate::geometry::Vec3;
 use crate::mesh::SurfaceMesh;
-use crate::solve::{CholeskyOptions, CholeskySolver, SolveError};
+use crate::solve::{CholeskyOptions, CholeskySolver, SolveError, SubtreeThreads};
 
 /// The editing methods.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -161,6 +161,10 @@ pub struct BenchEditReport {
     /// implicit: the drag, with the degenerate vertices' pull-back), ms.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub per_move_basis_ms: Option<f64>,
+    /// Implicit only: median move (one solve) with the backward substitution on two
+    /// threads ([`crate::solve::SubtreeThreads::FactorAndSolve`]), ms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub per_move_two_threads_ms: Option<f64>,
     /// Where `factor_ms` went, by part (implicit: the first system, Eq. 2.8, and its
     /// assembly, ordering, numeric factorisation and shared right-hand side, then the
     /// second system, Eq. 2.10; LSE: its system's parts), ms.
@@ -261,7 +265,8 @@ fn bench_method<M: EditMethod>(
 
 /// `fires bench edit`: one factorisation, then `moves` handle moves; the same ROI's
 /// cotangent system (free = ROI minus handles and anchors) is factored and solved with 3
-/// right-hand sides in the same run for comparison. Single-threaded.
+/// right-hand sides in the same run for comparison. Every solve is single-threaded except
+/// `per_move_two_threads_ms`; implicit editing factors on two threads.
 pub fn bench_edit(
     mesh: &SurfaceMesh,
     method: Method,
@@ -298,6 +303,7 @@ pub fn bench_edit(
     }
     let mut basis_ms = None;
     let mut per_move_basis_ms = None;
+    let mut per_move_two_threads_ms = None;
     let (factor_ms, per, entries, factor_parts) = match method {
         Method::Lse => {
             let (r, lse) = bench_method::<LseEditor>(&p, &LseOptions::default(), moves, scale)?;
@@ -321,6 +327,12 @@ pub fn bench_edit(
             basis_ms = Some(editor.drag_basis_ms());
             let per = move_times(&p, moves, scale, |tr| editor.solve_drag(&p, tr))?;
             per_move_basis_ms = Some(median(per));
+            let two = ImplicitOptions {
+                threads: SubtreeThreads::FactorAndSolve,
+                ..options
+            };
+            let (r2, _) = bench_method::<ImplicitEditor>(&p, &two, moves, scale)?;
+            per_move_two_threads_ms = Some(median(r2.1));
             r
         }
         Method::Naive => bench_method::<NaiveLaplacian>(&p, &Default::default(), moves, scale)?.0,
@@ -335,6 +347,7 @@ pub fn bench_edit(
         factor_entries: entries,
         basis_ms,
         per_move_basis_ms,
+        per_move_two_threads_ms,
         factor_parts,
     })
 }

@@ -20,7 +20,7 @@ use faer::{Mat, MatRef};
 
 use crate::solve::{
     lower_product_sum, sparse_mul_dense, transpose, CholeskyOptions, CholeskySolver, SharedRhs,
-    SolveError, SparseMatrix,
+    SolveError, SparseMatrix, SubtreeThreads,
 };
 
 /// One term `w (A x − b)ᵀ W (A x − b)` (`W = I` when `a_t_w` is `None`).
@@ -193,17 +193,30 @@ impl FactoredQuadratic {
         known: &[usize],
         x0: Option<Mat<f64>>,
     ) -> Result<Self, SolveError> {
-        Self::with_ordering(n, terms, known, x0, FactorOrdering::Auto)
+        Self::with_ordering(
+            n,
+            terms,
+            known,
+            x0,
+            FactorOrdering::Auto,
+            SubtreeThreads::Off,
+        )
     }
 
-    /// [`Self::new`] with the factor's fill-reducing order chosen by `ordering`.
+    /// [`Self::new`] with the factor's fill-reducing order chosen by `ordering` and a
+    /// second thread where `threads` says.
     pub fn with_ordering(
         n: usize,
         terms: Vec<QuadTerm>,
         known: &[usize],
         x0: Option<Mat<f64>>,
         ordering: FactorOrdering<'_>,
+        threads: SubtreeThreads,
     ) -> Result<Self, SolveError> {
+        let options = CholeskyOptions {
+            threads,
+            ..Default::default()
+        };
         let mut slot = vec![usize::MAX; n];
         let mut kept = Vec::new();
         for &k in known {
@@ -229,9 +242,7 @@ impl FactoredQuadratic {
         let (parts, gram) = Self::assemble(&slot, unknown.len(), kept.len(), terms, x0.as_ref())?;
         let assemble_ms = ms_since(clock);
         let mut chol = match ordering {
-            FactorOrdering::Auto => {
-                CholeskySolver::analyze(gram.as_ref(), CholeskyOptions::default())?
-            }
+            FactorOrdering::Auto => CholeskySolver::analyze(gram.as_ref(), options)?,
             FactorOrdering::Given(order) => {
                 // The given order of all entries, over the unknowns' slots.
                 let nu = unknown.len();
@@ -239,7 +250,7 @@ impl FactoredQuadratic {
                     .into_iter()
                     .filter_map(|v| slot.get(v).copied().filter(|&s| s < nu))
                     .collect();
-                CholeskySolver::analyze_ordered(gram.as_ref(), CholeskyOptions::default(), &perm)?
+                CholeskySolver::analyze_ordered(gram.as_ref(), options, &perm)?
             }
         };
         let analyze_ms = ms_since(clock) - assemble_ms;

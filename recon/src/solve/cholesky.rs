@@ -17,10 +17,12 @@ use faer::sparse::SparseColMatRef;
 use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
 
 use super::ordering::nested_dissection;
+use super::supernodal_numeric::factorize_supernodal_llt;
 use super::supernodal_solve::{
     forward_supernodal_llt, solve_supernodal_llt, solve_supernodal_llt_permuted,
     solve_supernodal_llt_plus,
 };
+use super::supernode_tree::{SubtreeSplit, SupernodeLayout};
 use super::SolveError;
 
 /// A right-hand side part shared by many solves (see [`CholeskySolver::share_rhs`]).
@@ -79,6 +81,19 @@ pub enum FillOrdering {
     NestedDissection,
 }
 
+/// Where [`CholeskySolver`] puts a second thread to work on independent subtrees of the
+/// elimination tree (supernodal LLᵀ factors only; see `supernodal_numeric`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SubtreeThreads {
+    /// One thread throughout (faer's numeric factorisation).
+    #[default]
+    Off,
+    /// The numeric factorisation on two threads; solves on one.
+    Factor,
+    /// The numeric factorisation and the backward substitution of every solve on two.
+    FactorAndSolve,
+}
+
 /// From this many unknowns [`FillOrdering::Auto`] tries nested dissection as well as AMD:
 /// it wins on large mesh systems (0.76× AMD's factor on a 90k-unknown LSE system) but
 /// not on every shape (1.1× on square grids), and below this size the second analysis
@@ -100,6 +115,8 @@ pub struct CholeskyOptions {
     pub kernel: SolveKernel,
     /// Fill-reducing ordering.
     pub ordering: FillOrdering,
+    /// A second thread on independent subtrees.
+    pub threads: SubtreeThreads,
 }
 
 impl Default for CholeskyOptions {
@@ -111,6 +128,7 @@ impl Default for CholeskyOptions {
             mode: FactorMode::Auto,
             kernel: SolveKernel::Auto,
             ordering: FillOrdering::Auto,
+            threads: SubtreeThreads::Off,
         }
     }
 }
@@ -155,11 +173,20 @@ fn symbolic_ordered(
         .map_err(|_| SolveError::OutOfMemory)
 }
 
+/// A supernodal factor's elimination tree and its split over two threads.
+#[derive(Debug)]
+struct SupernodeTree {
+    layout: SupernodeLayout,
+    split: Option<SubtreeSplit>,
+}
+
 /// A symmetric sparse factorisation: [`Self::analyze`] once per pattern,
 /// [`Self::factorize`] per set of values, [`Self::solve_in_place`] per right-hand side.
 #[derive(Debug, Clone)]
 pub struct CholeskySolver {
     symbolic: Arc<SymbolicCholesky<usize>>,
+    /// The supernodal tree and its split, when `options.threads` asks for them.
+    tree: Option<Arc<SupernodeTree>>,
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
     options: CholeskyOptions,
@@ -236,11 +263,8 @@ impl CholeskySolver {
                 return Err(SolveError::IndexOutOfRange { index: i, size: n });
             }
         }
-        Ok(Self::from_symbolic(
-            a,
-            options,
-            symbolic_ordered(a, options, order)?,
-        ))
+        let symbolic = symbolic_ordered(a, options, order)?;
+        Ok(Self::from_symbolic(a, options, symbolic))
     }
 
     fn from_symbolic(
@@ -248,8 +272,17 @@ impl CholeskySolver {
         options: CholeskyOptions,
         symbolic: SymbolicCholesky<usize>,
     ) -> Self {
+        let tree = (options.threads != SubtreeThreads::Off
+            && options.factorization == Factorization::Llt)
+            .then(|| SupernodeLayout::new(&symbolic))
+            .flatten()
+            .map(|layout| {
+                let split = SubtreeSplit::choose(&layout, &layout.work);
+                Arc::new(SupernodeTree { layout, split })
+            });
         Self {
             symbolic: Arc::new(symbolic),
+            tree,
             col_ptr: a.col_ptr().to_vec(),
             row_idx: a.row_idx().to_vec(),
             options,
@@ -278,6 +311,14 @@ impl CholeskySolver {
         self.symbolic.len_val()
     }
 
+    /// With [`SubtreeThreads`] on: the estimated time of the two-thread numeric
+    /// factorisation relative to one thread (the heavier thread's subtrees plus the rest,
+    /// in flops); `None` when the factor is not split (threads off, a simplicial factor,
+    /// or an elimination tree with no two heavy independent subtrees).
+    pub fn subtree_split_cost(&self) -> Option<f64> {
+        Some(self.tree.as_ref()?.split.as_ref()?.cost)
+    }
+
     /// A copy of this solver sharing the symbolic analysis but with no numeric factor.
     pub fn share_symbolic(&self) -> Self {
         Self {
@@ -296,6 +337,18 @@ impl CholeskySolver {
             return Err(SolveError::PatternChanged);
         }
         self.factored = false;
+        if let Some(tree) = &self.tree {
+            factorize_supernodal_llt(
+                &self.symbolic,
+                &tree.layout,
+                tree.split.as_ref(),
+                a,
+                self.options.side,
+                &mut self.values,
+            )?;
+            self.factored = true;
+            return Ok(());
+        }
         self.values.clear();
         self.values
             .try_reserve_exact(self.symbolic.len_val())
@@ -417,7 +470,7 @@ impl CholeskySolver {
             )));
         }
         if self.uses_columnwise_kernel()
-            && solve_supernodal_llt_permuted(&self.symbolic, &self.values, w)
+            && solve_supernodal_llt_permuted(&self.symbolic, &self.values, w, self.solve_split())
         {
             return Ok(());
         }
@@ -488,6 +541,7 @@ impl CholeskySolver {
                     &self.values,
                     rhs.rb_mut(),
                     Some(f.as_ref()),
+                    self.solve_split(),
                 )
             {
                 return Ok(());
@@ -498,6 +552,13 @@ impl CholeskySolver {
         }
         rhs += b;
         self.solve_in_place(rhs)
+    }
+
+    /// The split the backward substitutions use, if solves are to use two threads.
+    fn solve_split(&self) -> Option<&SubtreeSplit> {
+        (self.options.threads == SubtreeThreads::FactorAndSolve)
+            .then(|| self.tree.as_ref()?.split.as_ref())
+            .flatten()
     }
 
     fn uses_columnwise_kernel(&self) -> bool {
@@ -515,7 +576,7 @@ impl CholeskySolver {
         };
         wanted
             && matches!(self.options.par, Par::Seq)
-            && solve_supernodal_llt(&self.symbolic, &self.values, rhs)
+            && solve_supernodal_llt(&self.symbolic, &self.values, rhs, self.solve_split())
     }
 
     /// Solves `A X = B`, returning `X`.

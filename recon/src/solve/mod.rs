@@ -12,10 +12,12 @@
 //! * [`LeastSquaresSolver`]: stacked soft constraints `Σ wₖ‖Aₖx − bₖ‖²` via the normal
 //!   equations.
 //!
-//! Threading: everything defaults to `Par::Seq`. On the 2-core machines here faer's
-//! parallel sparse solves were measured 10–16× slower than sequential ones (faer issue
-//! #211); parallelise across right-hand sides instead if needed. The one exception is
-//! `FillOrdering::Auto`'s two independent symbolic analyses, which run on two threads.
+//! Threading: everything defaults to one thread (`Par::Seq`). On the 2-core machines here
+//! faer's parallel sparse factorisation and solves were measured slower than sequential
+//! ones (faer issue #211). The exceptions: `FillOrdering::Auto`'s two independent symbolic
+//! analyses run on two threads, and [`SubtreeThreads`] puts a second thread on
+//! independent subtrees of the elimination tree (our own supernodal numeric factorisation
+//! and backward substitution, same factor layout as faer's).
 
 mod cholesky;
 mod error;
@@ -23,11 +25,13 @@ mod fixed;
 mod least_squares;
 mod ordering;
 mod sparse;
+mod supernodal_numeric;
 mod supernodal_solve;
+mod supernode_tree;
 
 pub use cholesky::{
     CholeskyOptions, CholeskySolver, FactorMode, Factorization, FillOrdering, SharedRhs,
-    SolveKernel, ND_MIN_DIM,
+    SolveKernel, SubtreeThreads, ND_MIN_DIM,
 };
 pub use error::SolveError;
 pub use fixed::FixedSolver;

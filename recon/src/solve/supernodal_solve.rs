@@ -16,6 +16,8 @@
 //! arithmetic operations*, 1988, applied to the etree). The others stay zero, so skipping
 //! them changes no value; the backward substitution still reads the whole factor.
 
+use std::ops::Range;
+
 use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
@@ -23,6 +25,8 @@ use faer::linalg::triangular_solve::{
 use faer::reborrow::ReborrowMut;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 use faer::{Accum, Mat, MatMut, MatRef, Par};
+
+use super::supernode_tree::SubtreeSplit;
 
 /// One supernode: first column, width, its below-diagonal row pattern and its values
 /// (column-major, `width + pattern.len()` rows).
@@ -71,8 +75,9 @@ pub(crate) fn solve_supernodal_llt(
     symbolic: &SymbolicCholesky<usize>,
     values: &[f64],
     rhs: MatMut<'_, f64>,
+    split: Option<&SubtreeSplit>,
 ) -> bool {
-    solve_supernodal_llt_plus(symbolic, values, rhs, None)
+    solve_supernodal_llt_plus(symbolic, values, rhs, None, split)
 }
 
 /// [`solve_supernodal_llt`] of `b + rhs` where `shared` is `L⁻¹ P b` from
@@ -82,6 +87,7 @@ pub(crate) fn solve_supernodal_llt_plus(
     values: &[f64],
     mut rhs: MatMut<'_, f64>,
     shared: Option<MatRef<'_, f64>>,
+    split: Option<&SubtreeSplit>,
 ) -> bool {
     let Some(nodes) = supernodes(symbolic, values) else {
         return false;
@@ -101,10 +107,10 @@ pub(crate) fn solve_supernodal_llt_plus(
         let block = rhs.rb_mut().subcols_mut(col, k);
         let base = shared.map(|b| b.subcols(col, k));
         match k {
-            1 => solve_block::<1>(&nodes, fwd, inv, block, base),
-            2 => solve_block::<2>(&nodes, fwd, inv, block, base),
-            3 => solve_block::<3>(&nodes, fwd, inv, block, base),
-            _ => solve_block::<4>(&nodes, fwd, inv, block, base),
+            1 => solve_block::<1>(&nodes, fwd, inv, block, base, split),
+            2 => solve_block::<2>(&nodes, fwd, inv, block, base, split),
+            3 => solve_block::<3>(&nodes, fwd, inv, block, base, split),
+            _ => solve_block::<4>(&nodes, fwd, inv, block, base, split),
         }
         col += k;
     }
@@ -164,6 +170,7 @@ pub(crate) fn solve_supernodal_llt_permuted<const K: usize>(
     symbolic: &SymbolicCholesky<usize>,
     values: &[f64],
     w: &mut [[f64; K]],
+    split: Option<&SubtreeSplit>,
 ) -> bool {
     if w.len() != symbolic.nrows() {
         return false;
@@ -172,7 +179,7 @@ pub(crate) fn solve_supernodal_llt_permuted<const K: usize>(
         return false;
     };
     forward_reach(&nodes, w);
-    backward(&nodes, w);
+    backward(&nodes, w, split);
     true
 }
 
@@ -190,6 +197,7 @@ fn solve_block<const K: usize>(
     inv: &[usize],
     mut rhs: MatMut<'_, f64>,
     shared: Option<MatRef<'_, f64>>,
+    split: Option<&SubtreeSplit>,
 ) {
     // Gather and scatter read `rhs` and `w` in order and write through the permutation
     // (independent stores instead of dependent random loads).
@@ -205,7 +213,7 @@ fn solve_block<const K: usize>(
             }
         }
     }
-    backward(nodes, &mut w);
+    backward(nodes, &mut w, split);
     for (r, &f) in w.iter().zip(fwd) {
         for c in 0..K {
             rhs[(f, c)] = r[c];
@@ -298,44 +306,124 @@ fn forward_node<const K: usize>(s: &Supernode<'_>, w: &mut [[f64; K]], tmp: &mut
     }
 }
 
-/// `Lᵀ x = y`: per supernode in reverse, gather the pattern rows once, subtract their
-/// contribution column by column, then a dense triangular solve on the diagonal block.
-fn backward<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
-    let mut tmp: Vec<[f64; K]> = Vec::new();
-    let mut below_dots: Vec<[f64; K]> = Vec::new();
-    for s in nodes.iter().rev() {
-        if s.width >= DENSE_WIDTH {
-            backward_dense(s, w);
-            continue;
+/// `Lᵀ x = y`: the supernodes in reverse. With a `split`, the supernodes outside its
+/// subtrees first, then the two sets of subtrees on two threads: a subtree's supernodes
+/// read only rows of their own subtree and of the rest, which is final by then.
+fn backward<const K: usize>(
+    nodes: &[Supernode<'_>],
+    w: &mut [[f64; K]],
+    split: Option<&SubtreeSplit>,
+) {
+    let mut scratch = BackwardScratch::default();
+    let Some(split) = split else {
+        for s in nodes.iter().rev() {
+            backward_node(s, w, 0, &[], &mut scratch);
         }
-        let rows = s.width + s.pattern.len();
-        tmp.clear();
-        tmp.extend(s.pattern.iter().map(|&r| w[r]));
-        // The below-diagonal products need only the gathered rows: all of them first, in
-        // ascending column order, so the supernode's values stream through memory once in
-        // address order; then the triangular solve on the diagonal block, in reverse.
-        below_dots.clear();
-        below_dots.extend(
-            s.values
-                .chunks_exact(rows)
-                .map(|col| dot4(&tmp, &col[s.width..])),
-        );
-        for jj in (0..s.width).rev() {
-            let block = &s.values[jj * rows..jj * rows + s.width];
-            let mut acc = w[s.start + jj];
-            let d = below_dots[jj];
-            for c in 0..K {
-                acc[c] -= d[c];
+        return;
+    };
+    let mut in_bin = vec![false; nodes.len()];
+    for r in split.bins.iter().flatten() {
+        in_bin[r.clone()].fill(true);
+    }
+    for (s, _) in nodes.iter().zip(&in_bin).rev().filter(|(_, &b)| !b) {
+        backward_node(s, w, 0, &[], &mut scratch);
+    }
+    let frozen = w.to_vec();
+    // Each subtree's rows, cut out of `w` in order.
+    let cols =
+        |r: &Range<usize>| nodes[r.start].start..nodes[r.end - 1].start + nodes[r.end - 1].width;
+    let mut ranges: Vec<(usize, Range<usize>)> = split
+        .bins
+        .iter()
+        .enumerate()
+        .flat_map(|(b, rs)| rs.iter().map(move |r| (b, r.clone())))
+        .collect();
+    ranges.sort_by_key(|(_, r)| r.start);
+    type Job<'v, const K: usize> = (Range<usize>, usize, &'v mut [[f64; K]]);
+    let mut jobs: [Vec<Job<'_, K>>; 2] = [Vec::new(), Vec::new()];
+    let mut left: &mut [[f64; K]] = w;
+    let mut at = 0;
+    for (b, r) in ranges {
+        let c = cols(&r);
+        let (_, tail) = std::mem::take(&mut left).split_at_mut(c.start - at);
+        let (mine, tail) = tail.split_at_mut(c.len());
+        at = c.end;
+        jobs[b].push((r, c.start, mine));
+        left = tail;
+    }
+    let [jobs0, jobs1] = jobs;
+    let frozen = &frozen;
+    let run = |jobs: Vec<Job<'_, K>>| {
+        let mut scratch = BackwardScratch::default();
+        for (r, c0, own) in jobs {
+            for s in nodes[r].iter().rev() {
+                backward_node(s, own, c0, frozen, &mut scratch);
             }
-            let d = dot4(&w[s.start + jj + 1..s.start + s.width], &block[jj + 1..]);
-            for c in 0..K {
-                acc[c] -= d[c];
-            }
-            for v in &mut acc {
-                *v /= block[jj];
-            }
-            w[s.start + jj] = acc;
         }
+    };
+    std::thread::scope(|scope| {
+        let other = scope.spawn(|| run(jobs1));
+        run(jobs0);
+        other
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+    });
+}
+
+/// Scratch of [`backward_node`].
+#[derive(Default)]
+struct BackwardScratch<const K: usize> {
+    tmp: Vec<[f64; K]>,
+    below_dots: Vec<[f64; K]>,
+}
+
+/// One supernode's step of the backward substitution. `own` holds the rows from `c0` on
+/// (the supernode's own columns among them); rows outside it are read from `frozen`.
+fn backward_node<const K: usize>(
+    s: &Supernode<'_>,
+    own: &mut [[f64; K]],
+    c0: usize,
+    frozen: &[[f64; K]],
+    scratch: &mut BackwardScratch<K>,
+) {
+    let row = |own: &[[f64; K]], r: usize| match r.checked_sub(c0).and_then(|i| own.get(i)) {
+        Some(v) => *v,
+        None => frozen[r],
+    };
+    let start = s.start - c0;
+    if s.width >= DENSE_WIDTH {
+        let below = Mat::from_fn(s.pattern.len(), K, |p, c| row(own, s.pattern[p])[c]);
+        backward_dense(s, own, start, below.as_ref());
+        return;
+    }
+    let rows = s.width + s.pattern.len();
+    let BackwardScratch { tmp, below_dots } = scratch;
+    tmp.clear();
+    tmp.extend(s.pattern.iter().map(|&r| row(own, r)));
+    // The below-diagonal products need only the gathered rows: all of them first, in
+    // ascending column order, so the supernode's values stream through memory once in
+    // address order; then the triangular solve on the diagonal block, in reverse.
+    below_dots.clear();
+    below_dots.extend(
+        s.values
+            .chunks_exact(rows)
+            .map(|col| dot4(tmp, &col[s.width..])),
+    );
+    for jj in (0..s.width).rev() {
+        let block = &s.values[jj * rows..jj * rows + s.width];
+        let mut acc = own[start + jj];
+        let d = below_dots[jj];
+        for c in 0..K {
+            acc[c] -= d[c];
+        }
+        let d = dot4(&own[start + jj + 1..start + s.width], &block[jj + 1..]);
+        for c in 0..K {
+            acc[c] -= d[c];
+        }
+        for v in &mut acc {
+            *v /= block[jj];
+        }
+        own[start + jj] = acc;
     }
 }
 
@@ -400,21 +488,27 @@ fn forward_dense<const K: usize>(s: &Supernode<'_>, w: &mut [[f64; K]]) {
     }
 }
 
-fn backward_dense<const K: usize>(s: &Supernode<'_>, w: &mut [[f64; K]]) {
+/// [`backward_node`] of a wide supernode through faer's dense kernels: `own` holds its
+/// columns from `start`, `below` the values of its pattern rows.
+fn backward_dense<const K: usize>(
+    s: &Supernode<'_>,
+    own: &mut [[f64; K]],
+    start: usize,
+    below: MatRef<'_, f64>,
+) {
     let (top, bot) = blocks(s);
-    let tmp = Mat::from_fn(s.pattern.len(), K, |p, c| w[s.pattern[p]][c]);
-    let mut xt = Mat::from_fn(s.width, K, |i, c| w[s.start + i][c]);
+    let mut xt = Mat::from_fn(s.width, K, |i, c| own[start + i][c]);
     matmul(
         xt.as_mut(),
         Accum::Add,
         bot.transpose(),
-        tmp.as_ref(),
+        below,
         -1.0,
         Par::Seq,
     );
     solve_upper_triangular_in_place(top.transpose(), xt.as_mut(), Par::Seq);
     for i in 0..s.width {
-        w[s.start + i] = std::array::from_fn(|c| xt[(i, c)]);
+        own[start + i] = std::array::from_fn(|c| xt[(i, c)]);
     }
 }
 

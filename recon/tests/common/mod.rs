@@ -1,2 +1,3 @@
 pub mod disc;
 pub mod netgen;
+pub mod systems;
