@@ -486,11 +486,16 @@ impl FirstSystem {
 /// mesh graph, whose separators are [`COUPLING_RINGS`] rings wide
 /// ([`OrderingSkeleton::order_free`]); the normal matrix is not needed.
 fn first_system_order(problem: &EditProblem) -> Result<Vec<usize>, SolveError> {
-    let mut fixed = vec![false; problem.len()];
-    for l in problem.constrained() {
-        fixed[l] = true;
-    }
-    OrderingSkeleton::new(&problem.neighbors, COUPLING_RINGS)?.order_free(&fixed)
+    free_order(problem, COUPLING_RINGS)
+}
+
+/// Nested dissection of the free vertices on the mesh graph, for a system coupling
+/// vertices up to `rings` rings apart (separators that wide).
+fn free_order(problem: &EditProblem, rings: usize) -> Result<Vec<usize>, SolveError> {
+    let fixed: Vec<bool> = (0..problem.len())
+        .map(|l| problem.is_constrained(l))
+        .collect();
+    OrderingSkeleton::new(&problem.neighbors, rings)?.order_free(&fixed)
 }
 
 /// The shear-removal system (Eq. 2.10): the cotangent stiffness of the original mesh,
@@ -510,10 +515,14 @@ impl SecondSystem {
             k.as_ref(),
             Mat::from_fn(problem.len(), 3, |i, c| problem.rest[i][c]).as_ref(),
         )?;
-        let solver = FixedSolver::precompute(
+        // The cotangent system couples 1-rings: nested dissection on the mesh graph is
+        // that of its own graph, and no third thread races AMD against it (which the
+        // default ordering would do, beside the first system's thread).
+        let solver = FixedSolver::precompute_ordered(
             k.as_ref(),
             &problem.constrained(),
             CholeskyOptions::default(),
+            &free_order(problem, 1)?,
         )?;
         Ok(Self {
             solver,

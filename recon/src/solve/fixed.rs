@@ -34,13 +34,45 @@ impl FixedSolver {
         known: &[usize],
         options: CholeskyOptions,
     ) -> Result<Self, SolveError> {
+        Self::precompute_with(a, known, |a_uu, _| CholeskySolver::new(a_uu, options))
+    }
+
+    /// [`Self::precompute`] with the factor's elimination order given over all `n`
+    /// indices (the known ones are skipped; e.g. from
+    /// [`super::OrderingSkeleton::order_free`]). Fails unless it holds every free index once.
+    pub fn precompute_ordered(
+        a: SparseColMatRef<'_, usize, f64>,
+        known: &[usize],
+        options: CholeskyOptions,
+        order: &[usize],
+    ) -> Result<Self, SolveError> {
+        Self::precompute_with(a, known, |a_uu, slot| {
+            let nu = a_uu.nrows();
+            let perm: Vec<usize> = order
+                .iter()
+                .filter_map(|&i| slot.get(i).copied().filter(|&s| s < nu))
+                .collect();
+            let mut chol = CholeskySolver::analyze_ordered(a_uu, options, &perm)?;
+            chol.factorize(a_uu)?;
+            Ok(chol)
+        })
+    }
+
+    fn precompute_with(
+        a: SparseColMatRef<'_, usize, f64>,
+        known: &[usize],
+        factor: impl FnOnce(
+            SparseColMatRef<'_, usize, f64>,
+            &[usize],
+        ) -> Result<CholeskySolver, SolveError>,
+    ) -> Result<Self, SolveError> {
         let n = a.nrows();
         if a.ncols() != n {
             return Err(SolveError::Dimension("matrix is not square".into()));
         }
         let (slot, known, unknown) = partition(n, known)?;
         let (a_uu, a_uk) = split_blocks(a, &slot, unknown.len(), known.len())?;
-        let chol = CholeskySolver::new(a_uu.as_ref(), options)?;
+        let chol = factor(a_uu.as_ref(), &slot)?;
         let mut factor_row = vec![NONE; unknown.len()];
         for (k, u) in chol.factor_order().into_iter().enumerate() {
             factor_row[u] = k;
