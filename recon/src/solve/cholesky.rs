@@ -88,9 +88,11 @@ pub enum SubtreeThreads {
     /// One thread throughout (faer's numeric factorisation).
     #[default]
     Off,
-    /// The numeric factorisation on two threads; solves on one.
+    /// The numeric factorisation (and [`CholeskySolver::share_rhs`]) on two threads;
+    /// solves on one.
     Factor,
-    /// The numeric factorisation and the backward substitution of every solve on two.
+    /// The numeric factorisation and the substitutions of every solve on two (a forward
+    /// substitution over a sparse right-hand side's reach stays on one).
     FactorAndSolve,
 }
 
@@ -489,7 +491,8 @@ impl CholeskySolver {
     }
 
     /// Prepares `b`, a right-hand side part that many solves share, for
-    /// [`Self::solve_in_place_plus`]: its forward substitution is done here, once.
+    /// [`Self::solve_in_place_plus`]: its forward substitution is done here, once (on two
+    /// threads with any [`SubtreeThreads`] on, as part of preparing the factor).
     pub fn share_rhs(&self, b: MatRef<'_, f64>) -> Result<SharedRhs, SolveError> {
         if !self.factored {
             return Err(SolveError::NotFactorized);
@@ -502,7 +505,7 @@ impl CholeskySolver {
             )));
         }
         let forward = (self.uses_columnwise_kernel())
-            .then(|| forward_supernodal_llt(&self.symbolic, &self.values, b))
+            .then(|| forward_supernodal_llt(&self.symbolic, &self.values, b, self.factor_split()))
             .flatten();
         Ok(match forward {
             Some(f) => SharedRhs::Forward(f),
@@ -554,10 +557,17 @@ impl CholeskySolver {
         self.solve_in_place(rhs)
     }
 
-    /// The split the backward substitutions use, if solves are to use two threads.
+    /// The split of the factor's two-thread work, with any [`SubtreeThreads`] on: the
+    /// numeric factorisation and [`Self::share_rhs`]'s forward substitution (both part
+    /// of preparing the factor).
+    fn factor_split(&self) -> Option<&SubtreeSplit> {
+        self.tree.as_ref()?.split.as_ref()
+    }
+
+    /// The split the substitutions use, if solves are to use two threads.
     fn solve_split(&self) -> Option<&SubtreeSplit> {
         (self.options.threads == SubtreeThreads::FactorAndSolve)
-            .then(|| self.tree.as_ref()?.split.as_ref())
+            .then(|| self.factor_split())
             .flatten()
     }
 

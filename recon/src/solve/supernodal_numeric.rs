@@ -215,10 +215,7 @@ pub(crate) fn factorize_supernodal_llt(
     r0?;
     r1?;
     // The rest, in order: maximal runs of supernodes outside the bins.
-    let mut in_bin = vec![false; ns];
-    for r in split.bins.iter().flatten() {
-        in_bin[r.clone()].fill(true);
-    }
+    let in_bin = split.in_bins(ns);
     let mut k = 0;
     while k < ns {
         if in_bin[k] {

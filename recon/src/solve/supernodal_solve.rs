@@ -123,6 +123,7 @@ pub(crate) fn forward_supernodal_llt(
     symbolic: &SymbolicCholesky<usize>,
     values: &[f64],
     b: MatRef<'_, f64>,
+    split: Option<&SubtreeSplit>,
 ) -> Option<Mat<f64>> {
     let nodes = supernodes(symbolic, values)?;
     let mut out = Mat::zeros(b.nrows(), b.ncols());
@@ -130,10 +131,10 @@ pub(crate) fn forward_supernodal_llt(
     while col < b.ncols() {
         let k = (b.ncols() - col).min(4);
         match k {
-            1 => forward_columns::<1>(symbolic, &nodes, b, col, out.as_mut()),
-            2 => forward_columns::<2>(symbolic, &nodes, b, col, out.as_mut()),
-            3 => forward_columns::<3>(symbolic, &nodes, b, col, out.as_mut()),
-            _ => forward_columns::<4>(symbolic, &nodes, b, col, out.as_mut()),
+            1 => forward_columns::<1>(symbolic, &nodes, b, col, out.as_mut(), split),
+            2 => forward_columns::<2>(symbolic, &nodes, b, col, out.as_mut(), split),
+            3 => forward_columns::<3>(symbolic, &nodes, b, col, out.as_mut(), split),
+            _ => forward_columns::<4>(symbolic, &nodes, b, col, out.as_mut(), split),
         }
         col += k;
     }
@@ -147,6 +148,7 @@ fn forward_columns<const K: usize>(
     b: MatRef<'_, f64>,
     col: usize,
     mut out: MatMut<'_, f64>,
+    split: Option<&SubtreeSplit>,
 ) {
     let fwd = symbolic.perm().map(|p| p.arrays().0);
     let mut w: Vec<[f64; K]> = (0..b.nrows())
@@ -155,7 +157,7 @@ fn forward_columns<const K: usize>(
             std::array::from_fn(|c| b[(i, col + c)])
         })
         .collect();
-    forward(nodes, &mut w);
+    forward(nodes, &mut w, split);
     for (k, v) in w.iter().enumerate() {
         for (c, &x) in v.iter().enumerate() {
             out[(k, col + c)] = x;
@@ -178,16 +180,20 @@ pub(crate) fn solve_supernodal_llt_permuted<const K: usize>(
     let Some(nodes) = supernodes(symbolic, values) else {
         return false;
     };
-    forward_reach(&nodes, w);
+    forward_reach(&nodes, w, split);
     backward(&nodes, w, split);
     true
 }
 
 /// The forward substitution over the supernodes `w`'s nonzero rows reach.
-fn forward_reach<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
+fn forward_reach<const K: usize>(
+    nodes: &[Supernode<'_>],
+    w: &mut [[f64; K]],
+    split: Option<&SubtreeSplit>,
+) {
     match reach(nodes, w) {
         Some(visit) => forward_on(nodes, w, &visit),
-        None => forward(nodes, w),
+        None => forward(nodes, w, split),
     }
 }
 
@@ -205,7 +211,7 @@ fn solve_block<const K: usize>(
     for (i, &p) in inv.iter().enumerate() {
         w[p] = std::array::from_fn(|c| rhs[(i, c)]);
     }
-    forward_reach(nodes, &mut w);
+    forward_reach(nodes, &mut w, split);
     if let Some(b) = shared {
         for (k, r) in w.iter_mut().enumerate() {
             for (c, v) in r.iter_mut().enumerate() {
@@ -264,46 +270,129 @@ fn reach<const K: usize>(nodes: &[Supernode<'_>], w: &[[f64; K]]) -> Option<Vec<
 fn forward_on<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]], visit: &[usize]) {
     let mut tmp: Vec<[f64; K]> = Vec::new();
     for &k in visit {
-        forward_node(&nodes[k], w, &mut tmp);
+        forward_node(&nodes[k], w, 0, &mut [], &mut tmp);
     }
 }
 
 /// `L y = b`: per supernode, a dense triangular solve on the diagonal block, then the
 /// block's contribution to its pattern rows accumulated contiguously and scattered once.
-fn forward<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]]) {
+/// With a `split`, the two sets of subtrees first, on two threads (each spills its
+/// contributions to rows outside its subtrees, which belong to the rest, into its own
+/// array, added after), then the rest in order.
+fn forward<const K: usize>(
+    nodes: &[Supernode<'_>],
+    w: &mut [[f64; K]],
+    split: Option<&SubtreeSplit>,
+) {
     let mut tmp: Vec<[f64; K]> = Vec::new();
-    for s in nodes {
-        forward_node(s, w, &mut tmp);
+    let Some(split) = split else {
+        for s in nodes {
+            forward_node(s, w, 0, &mut [], &mut tmp);
+        }
+        return;
+    };
+    let n = w.len();
+    let [jobs0, jobs1] = subtree_jobs(nodes, split, w);
+    let run = |jobs: Vec<Job<'_, K>>| {
+        let mut tmp: Vec<[f64; K]> = Vec::new();
+        let mut spill = vec![[0.0; K]; n];
+        for (r, c0, own) in jobs {
+            for s in &nodes[r] {
+                forward_node(s, own, c0, &mut spill, &mut tmp);
+            }
+        }
+        spill
+    };
+    let (spill0, spill1) = std::thread::scope(|scope| {
+        let other = scope.spawn(|| run(jobs1));
+        let spill0 = run(jobs0);
+        let spill1 = other
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (spill0, spill1)
+    });
+    for ((x, a), b) in w.iter_mut().zip(&spill0).zip(&spill1) {
+        for c in 0..K {
+            x[c] -= a[c] + b[c];
+        }
+    }
+    let in_bin = split.in_bins(nodes.len());
+    for (s, _) in nodes.iter().zip(&in_bin).filter(|(_, &b)| !b) {
+        forward_node(s, w, 0, &mut [], &mut tmp);
     }
 }
 
-/// One supernode's step of the forward substitution (`tmp` is scratch).
-fn forward_node<const K: usize>(s: &Supernode<'_>, w: &mut [[f64; K]], tmp: &mut Vec<[f64; K]>) {
+/// One supernode's step of the forward substitution. `own` holds the rows from `c0` on
+/// (the supernode's columns among them); a contribution `t` to a row `r` outside it is
+/// added to `spill[r]` instead (to be subtracted later). `tmp` is scratch.
+fn forward_node<const K: usize>(
+    s: &Supernode<'_>,
+    own: &mut [[f64; K]],
+    c0: usize,
+    spill: &mut [[f64; K]],
+    tmp: &mut Vec<[f64; K]>,
+) {
+    let start = s.start - c0;
     if s.width >= DENSE_WIDTH {
-        forward_dense(s, w);
-        return;
-    }
-    let rows = s.width + s.pattern.len();
-    tmp.clear();
-    tmp.resize(s.pattern.len(), [0.0; K]);
-    for jj in 0..s.width {
-        let col = &s.values[jj * rows..(jj + 1) * rows];
-        let mut xj = w[s.start + jj];
-        for v in &mut xj {
-            *v /= col[jj];
-        }
-        w[s.start + jj] = xj;
-        let (block, below) = col.split_at(s.width);
-        for (ii, &l) in block.iter().enumerate().skip(jj + 1) {
-            sub_scaled(&mut w[s.start + ii], l, &xj);
-        }
-        for (t, &l) in tmp.iter_mut().zip(below) {
-            sub_scaled(t, -l, &xj);
+        forward_dense(s, own, start, tmp);
+    } else {
+        let rows = s.width + s.pattern.len();
+        tmp.clear();
+        tmp.resize(s.pattern.len(), [0.0; K]);
+        for jj in 0..s.width {
+            let col = &s.values[jj * rows..(jj + 1) * rows];
+            let mut xj = own[start + jj];
+            for v in &mut xj {
+                *v /= col[jj];
+            }
+            own[start + jj] = xj;
+            let (block, below) = col.split_at(s.width);
+            for (ii, &l) in block.iter().enumerate().skip(jj + 1) {
+                sub_scaled(&mut own[start + ii], l, &xj);
+            }
+            for (t, &l) in tmp.iter_mut().zip(below) {
+                sub_scaled(t, -l, &xj);
+            }
         }
     }
     for (&r, t) in s.pattern.iter().zip(tmp.iter()) {
-        sub_scaled(&mut w[r], 1.0, t);
+        match r.checked_sub(c0).and_then(|i| own.get_mut(i)) {
+            Some(x) => sub_scaled(x, 1.0, t),
+            None => sub_scaled(&mut spill[r], -1.0, t),
+        }
     }
+}
+
+/// One subtree range of a thread: its supernodes, its first row and its rows of `w`.
+type Job<'w, const K: usize> = (Range<usize>, usize, &'w mut [[f64; K]]);
+
+/// The rows of `w` cut into each subtree range's own slice, grouped by thread.
+fn subtree_jobs<'w, const K: usize>(
+    nodes: &[Supernode<'_>],
+    split: &SubtreeSplit,
+    w: &'w mut [[f64; K]],
+) -> [Vec<Job<'w, K>>; 2] {
+    let cols =
+        |r: &Range<usize>| nodes[r.start].start..nodes[r.end - 1].start + nodes[r.end - 1].width;
+    let mut ranges: Vec<(usize, Range<usize>)> = split
+        .bins
+        .iter()
+        .enumerate()
+        .flat_map(|(b, rs)| rs.iter().map(move |r| (b, r.clone())))
+        .collect();
+    ranges.sort_by_key(|(_, r)| r.start);
+    let mut jobs: [Vec<Job<'w, K>>; 2] = [Vec::new(), Vec::new()];
+    let mut left: &'w mut [[f64; K]] = w;
+    let mut at = 0;
+    for (b, r) in ranges {
+        let c = cols(&r);
+        let (_, tail) = std::mem::take(&mut left).split_at_mut(c.start - at);
+        let (mine, tail) = tail.split_at_mut(c.len());
+        at = c.end;
+        jobs[b].push((r, c.start, mine));
+        left = tail;
+    }
+    jobs
 }
 
 /// `Lᵀ x = y`: the supernodes in reverse. With a `split`, the supernodes outside its
@@ -321,37 +410,12 @@ fn backward<const K: usize>(
         }
         return;
     };
-    let mut in_bin = vec![false; nodes.len()];
-    for r in split.bins.iter().flatten() {
-        in_bin[r.clone()].fill(true);
-    }
+    let in_bin = split.in_bins(nodes.len());
     for (s, _) in nodes.iter().zip(&in_bin).rev().filter(|(_, &b)| !b) {
         backward_node(s, w, 0, &[], &mut scratch);
     }
     let frozen = w.to_vec();
-    // Each subtree's rows, cut out of `w` in order.
-    let cols =
-        |r: &Range<usize>| nodes[r.start].start..nodes[r.end - 1].start + nodes[r.end - 1].width;
-    let mut ranges: Vec<(usize, Range<usize>)> = split
-        .bins
-        .iter()
-        .enumerate()
-        .flat_map(|(b, rs)| rs.iter().map(move |r| (b, r.clone())))
-        .collect();
-    ranges.sort_by_key(|(_, r)| r.start);
-    type Job<'v, const K: usize> = (Range<usize>, usize, &'v mut [[f64; K]]);
-    let mut jobs: [Vec<Job<'_, K>>; 2] = [Vec::new(), Vec::new()];
-    let mut left: &mut [[f64; K]] = w;
-    let mut at = 0;
-    for (b, r) in ranges {
-        let c = cols(&r);
-        let (_, tail) = std::mem::take(&mut left).split_at_mut(c.start - at);
-        let (mine, tail) = tail.split_at_mut(c.len());
-        at = c.end;
-        jobs[b].push((r, c.start, mine));
-        left = tail;
-    }
-    let [jobs0, jobs1] = jobs;
+    let [jobs0, jobs1] = subtree_jobs(nodes, split, w);
     let frozen = &frozen;
     let run = |jobs: Vec<Job<'_, K>>| {
         let mut scratch = BackwardScratch::default();
@@ -465,13 +529,20 @@ fn blocks<'a>(s: &Supernode<'a>) -> (MatRef<'a, f64>, MatRef<'a, f64>) {
         .split_at_row(s.width)
 }
 
-fn forward_dense<const K: usize>(s: &Supernode<'_>, w: &mut [[f64; K]]) {
+/// [`forward_node`] of a wide supernode through faer's dense kernels: `own` holds its
+/// columns from `start`; its contributions to its pattern rows are left in `tmp`.
+fn forward_dense<const K: usize>(
+    s: &Supernode<'_>,
+    own: &mut [[f64; K]],
+    start: usize,
+    tmp: &mut Vec<[f64; K]>,
+) {
     let (top, bot) = blocks(s);
-    let mut xt = Mat::from_fn(s.width, K, |i, c| w[s.start + i][c]);
+    let mut xt = Mat::from_fn(s.width, K, |i, c| own[start + i][c]);
     solve_lower_triangular_in_place(top, xt.as_mut(), Par::Seq);
-    let mut tmp = Mat::zeros(s.pattern.len(), K);
+    let mut below = Mat::zeros(s.pattern.len(), K);
     matmul(
-        tmp.as_mut(),
+        below.as_mut(),
         Accum::Replace,
         bot,
         xt.as_ref(),
@@ -479,13 +550,10 @@ fn forward_dense<const K: usize>(s: &Supernode<'_>, w: &mut [[f64; K]]) {
         Par::Seq,
     );
     for i in 0..s.width {
-        w[s.start + i] = std::array::from_fn(|c| xt[(i, c)]);
+        own[start + i] = std::array::from_fn(|c| xt[(i, c)]);
     }
-    for (p, &r) in s.pattern.iter().enumerate() {
-        for c in 0..K {
-            w[r][c] -= tmp[(p, c)];
-        }
-    }
+    tmp.clear();
+    tmp.extend((0..s.pattern.len()).map(|p| std::array::from_fn(|c| below[(p, c)])));
 }
 
 /// [`backward_node`] of a wide supernode through faer's dense kernels: `own` holds its

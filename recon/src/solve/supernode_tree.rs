@@ -153,6 +153,15 @@ pub(crate) struct SubtreeSplit {
 }
 
 impl SubtreeSplit {
+    /// Per supernode (of `len`): whether it is in one of the two sets of subtrees.
+    pub(crate) fn in_bins(&self, len: usize) -> Vec<bool> {
+        let mut in_bin = vec![false; len];
+        for r in self.bins.iter().flatten() {
+            in_bin[r.clone()].fill(true);
+        }
+        in_bin
+    }
+
     /// Splits the elimination tree for the per-supernode weights `weight`: starting from
     /// the roots, the heaviest subtree is repeatedly replaced by its children (its root
     /// joins the rest), and after each step the subtrees are packed into two bins
