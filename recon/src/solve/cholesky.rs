@@ -175,11 +175,14 @@ fn symbolic_ordered(
         .map_err(|_| SolveError::OutOfMemory)
 }
 
-/// A supernodal factor's elimination tree and its split over two threads.
+/// A supernodal factor's elimination tree and its splits over two threads.
 #[derive(Debug)]
 struct SupernodeTree {
     layout: SupernodeLayout,
+    /// Balancing the numeric factorisation's flops.
     split: Option<SubtreeSplit>,
+    /// Balancing the values a substitution reads (its cost: it streams the factor once).
+    solve_split: Option<SubtreeSplit>,
 }
 
 /// A symmetric sparse factorisation: [`Self::analyze`] once per pattern,
@@ -280,7 +283,17 @@ impl CholeskySolver {
             .flatten()
             .map(|layout| {
                 let split = SubtreeSplit::choose(&layout, &layout.work);
-                Arc::new(SupernodeTree { layout, split })
+                let values: Vec<f64> = layout
+                    .val_ptr
+                    .windows(2)
+                    .map(|w| (w[1] - w[0]) as f64)
+                    .collect();
+                let solve_split = SubtreeSplit::choose(&layout, &values);
+                Arc::new(SupernodeTree {
+                    layout,
+                    split,
+                    solve_split,
+                })
             });
         Self {
             symbolic: Arc::new(symbolic),
@@ -505,7 +518,7 @@ impl CholeskySolver {
             )));
         }
         let forward = (self.uses_columnwise_kernel())
-            .then(|| forward_supernodal_llt(&self.symbolic, &self.values, b, self.factor_split()))
+            .then(|| forward_supernodal_llt(&self.symbolic, &self.values, b, self.share_split()))
             .flatten();
         Ok(match forward {
             Some(f) => SharedRhs::Forward(f),
@@ -557,17 +570,16 @@ impl CholeskySolver {
         self.solve_in_place(rhs)
     }
 
-    /// The split of the factor's two-thread work, with any [`SubtreeThreads`] on: the
-    /// numeric factorisation and [`Self::share_rhs`]'s forward substitution (both part
-    /// of preparing the factor).
-    fn factor_split(&self) -> Option<&SubtreeSplit> {
-        self.tree.as_ref()?.split.as_ref()
+    /// The split of [`Self::share_rhs`]'s forward substitution, with any
+    /// [`SubtreeThreads`] on (it is part of preparing the factor).
+    fn share_split(&self) -> Option<&SubtreeSplit> {
+        self.tree.as_ref()?.solve_split.as_ref()
     }
 
     /// The split the substitutions use, if solves are to use two threads.
     fn solve_split(&self) -> Option<&SubtreeSplit> {
         (self.options.threads == SubtreeThreads::FactorAndSolve)
-            .then(|| self.factor_split())
+            .then(|| self.tree.as_ref()?.solve_split.as_ref())
             .flatten()
     }
 
