@@ -316,23 +316,35 @@ pub fn bench_edit(
         }
         Method::Poisson => bench_method::<PoissonEditor>(&p, &Default::default(), moves, scale)?.0,
         Method::Implicit => {
-            // The drag: first system only, one solve per move, then with the drag basis.
+            // The drag: first system only, one solve per move, on one thread and (another
+            // editor) on two, the moves interleaved so machine noise hits both alike; then
+            // from the drag basis.
             let options = ImplicitOptions {
                 second_solve: false,
                 drag_basis: false,
                 ..Default::default()
             };
-            let (r, mut editor) = bench_method::<ImplicitEditor>(&p, &options, moves, scale)?;
-            editor.precompute_drag_basis(&p)?;
-            basis_ms = Some(editor.drag_basis_ms());
-            let per = move_times(&p, moves, scale, |tr| editor.solve_drag(&p, tr))?;
-            per_move_basis_ms = Some(median(per));
+            let (mut r, mut editor) = bench_method::<ImplicitEditor>(&p, &options, 1, scale)?;
             let two = ImplicitOptions {
                 threads: SubtreeThreads::FactorAndSolve,
                 ..options
             };
-            let (r2, _) = bench_method::<ImplicitEditor>(&p, &two, moves, scale)?;
-            per_move_two_threads_ms = Some(median(r2.1));
+            let mut editor2 = ImplicitEditor::factor(&p, &two)?;
+            let (mut one_ms, mut two_ms) = (Vec::new(), Vec::new());
+            for k in 0..moves.max(1) {
+                let tr = bench_move(&p, k + 1, scale);
+                for (ed, times) in [(&mut editor, &mut one_ms), (&mut editor2, &mut two_ms)] {
+                    let t = Instant::now();
+                    std::hint::black_box(ed.solve(&p, &tr)?);
+                    times.push(ms(t));
+                }
+            }
+            r.1 = one_ms;
+            per_move_two_threads_ms = Some(median(two_ms));
+            editor.precompute_drag_basis(&p)?;
+            basis_ms = Some(editor.drag_basis_ms());
+            let per = move_times(&p, moves, scale, |tr| editor.solve_drag(&p, tr))?;
+            per_move_basis_ms = Some(median(per));
             r
         }
         Method::Naive => bench_method::<NaiveLaplacian>(&p, &Default::default(), moves, scale)?.0,
