@@ -19,7 +19,7 @@ use super::spec::{EditSpec, HandleSpec, Select, TransformSpec};
 use super::{detail_error, EditError};
 use crate::geometry::Vec3;
 use crate::mesh::SurfaceMesh;
-use crate::solve::{CholeskyOptions, CholeskySolver, SolveError, SubtreeThreads};
+use crate::solve::{CholeskyOptions, CholeskySolver, SubtreeThreads};
 
 /// The editing methods.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -147,7 +147,8 @@ pub struct BenchEditReport {
     pub factor_ms: f64,
     /// Median time of one handle move (one solve; LSE without re-fitting), ms.
     pub per_move_ms: f64,
-    /// Median time of the same ROI's plain cotangent solve with 3 right-hand sides, ms.
+    /// Median time of the same ROI's plain cotangent solve with 3 right-hand sides, one
+    /// just before every timed move, ms.
     pub cotan_solve_ms: f64,
     /// Factor time of that cotangent system, ms.
     pub cotan_factor_ms: f64,
@@ -227,16 +228,40 @@ fn bench_move(p: &EditProblem, k: usize, scale: f64) -> Vec<Similarity> {
 /// Factor time, per-move times, factor entries and the factor's parts of one method.
 type BenchRun = (f64, Vec<f64>, usize, BTreeMap<String, f64>);
 
-/// The time of each of `moves` (at least one) handle moves answered by `solve`, ms.
+/// The same ROI's plain cotangent system, factored, whose 3-right-hand-side solve every
+/// timed move is compared with: it is solved just before each move, so machine noise hits
+/// both alike.
+struct CotanReference {
+    chol: CholeskySolver,
+    times: Vec<f64>,
+}
+
+impl CotanReference {
+    /// One 3-right-hand-side solve, timed.
+    fn solve(&mut self) -> Result<(), EditError> {
+        let r = self.times.len();
+        let mut rhs = Mat::from_fn(self.chol.dim(), 3, |i, c| ((i * (c + 3) + r) % 17) as f64);
+        let t = Instant::now();
+        self.chol.solve_in_place(rhs.as_mut())?;
+        self.times.push(ms(t));
+        std::hint::black_box(rhs);
+        Ok(())
+    }
+}
+
+/// The time of each of `moves` (at least one) handle moves answered by `solve`, ms, each
+/// after one timed `reference` solve.
 fn move_times(
     p: &EditProblem,
     moves: usize,
     scale: f64,
+    reference: &mut CotanReference,
     mut solve: impl FnMut(&[Similarity]) -> Result<Vec<Vec3>, EditError>,
 ) -> Result<Vec<f64>, EditError> {
     (0..moves.max(1))
         .map(|k| {
             let tr = bench_move(p, k + 1, scale);
+            reference.solve()?;
             let t = Instant::now();
             std::hint::black_box(solve(&tr)?);
             Ok(ms(t))
@@ -250,11 +275,12 @@ fn bench_method<M: EditMethod>(
     o: &M::Options,
     moves: usize,
     scale: f64,
+    reference: &mut CotanReference,
 ) -> Result<(BenchRun, M), EditError> {
     let t = Instant::now();
     let mut m = M::factor(p, o)?;
     let f = ms(t);
-    let per = move_times(p, moves, scale, |tr| m.solve(p, tr))?;
+    let per = move_times(p, moves, scale, reference, |tr| m.solve(p, tr))?;
     let parts = m
         .factor_parts()
         .into_iter()
@@ -292,29 +318,27 @@ pub fn bench_edit(
     let tf = Instant::now();
     let chol = CholeskySolver::new(kuu.as_ref(), CholeskyOptions::default())?;
     let cotan_factor_ms = ms(tf);
-    let mut cs = Vec::new();
-    for r in 0..moves.clamp(3, 15) {
-        let mut rhs = Mat::from_fn(free.len(), 3, |i, c| ((i * (c + 3) + r) % 17) as f64);
-        let t = Instant::now();
-        chol.solve_in_place(rhs.as_mut())
-            .map_err(|e: SolveError| EditError::Solve(e))?;
-        cs.push(ms(t));
-        std::hint::black_box(rhs);
-    }
+    let mut cotan = CotanReference {
+        chol,
+        times: Vec::new(),
+    };
     let mut basis_ms = None;
     let mut per_move_basis_ms = None;
     let mut per_move_two_threads_ms = None;
     let (factor_ms, per, entries, factor_parts) = match method {
         Method::Lse => {
-            let (r, lse) = bench_method::<LseEditor>(&p, &LseOptions::default(), moves, scale)?;
+            let (r, lse) =
+                bench_method::<LseEditor>(&p, &LseOptions::default(), moves, scale, &mut cotan)?;
             let t = Instant::now();
             let basis = lse.precompute_basis(&p)?;
             basis_ms = Some(ms(t));
-            let per = move_times(&p, moves, scale, |tr| basis.combine(&p, tr))?;
+            let per = move_times(&p, moves, scale, &mut cotan, |tr| basis.combine(&p, tr))?;
             per_move_basis_ms = Some(median(per));
             r
         }
-        Method::Poisson => bench_method::<PoissonEditor>(&p, &Default::default(), moves, scale)?.0,
+        Method::Poisson => {
+            bench_method::<PoissonEditor>(&p, &Default::default(), moves, scale, &mut cotan)?.0
+        }
         Method::Implicit => {
             // The drag: first system only, one solve per move, on one thread and (another
             // editor) on two, the moves interleaved so machine noise hits both alike; then
@@ -324,7 +348,8 @@ pub fn bench_edit(
                 drag_basis: false,
                 ..Default::default()
             };
-            let (mut r, mut editor) = bench_method::<ImplicitEditor>(&p, &options, 1, scale)?;
+            let (mut r, mut editor) =
+                bench_method::<ImplicitEditor>(&p, &options, 1, scale, &mut cotan)?;
             let two = ImplicitOptions {
                 threads: SubtreeThreads::FactorAndSolve,
                 ..options
@@ -333,6 +358,7 @@ pub fn bench_edit(
             let (mut one_ms, mut two_ms) = (Vec::new(), Vec::new());
             for k in 0..moves.max(1) {
                 let tr = bench_move(&p, k + 1, scale);
+                cotan.solve()?;
                 for (ed, times) in [(&mut editor, &mut one_ms), (&mut editor2, &mut two_ms)] {
                     let t = Instant::now();
                     std::hint::black_box(ed.solve(&p, &tr)?);
@@ -343,18 +369,20 @@ pub fn bench_edit(
             per_move_two_threads_ms = Some(median(two_ms));
             editor.precompute_drag_basis(&p)?;
             basis_ms = Some(editor.drag_basis_ms());
-            let per = move_times(&p, moves, scale, |tr| editor.solve_drag(&p, tr))?;
+            let per = move_times(&p, moves, scale, &mut cotan, |tr| editor.solve_drag(&p, tr))?;
             per_move_basis_ms = Some(median(per));
             r
         }
-        Method::Naive => bench_method::<NaiveLaplacian>(&p, &Default::default(), moves, scale)?.0,
+        Method::Naive => {
+            bench_method::<NaiveLaplacian>(&p, &Default::default(), moves, scale, &mut cotan)?.0
+        }
     };
     Ok(BenchEditReport {
         method: method.name().into(),
         roi_vertices: p.n_roi,
         factor_ms,
         per_move_ms: median(per),
-        cotan_solve_ms: median(cs),
+        cotan_solve_ms: median(cotan.times),
         cotan_factor_ms,
         factor_entries: entries,
         basis_ms,
