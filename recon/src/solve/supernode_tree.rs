@@ -33,7 +33,8 @@ pub(crate) struct SupernodeLayout {
 }
 
 impl SupernodeLayout {
-    /// The layout of a supernodal symbolic factor, or `None` if it is simplicial.
+    /// The layout of a supernodal symbolic factor, or `None` if it is simplicial or not
+    /// laid out as the kernels here expect.
     pub(crate) fn new(symbolic: &SymbolicCholesky<usize>) -> Option<Self> {
         let SymbolicCholeskyRaw::Supernodal(s) = symbolic.raw() else {
             return None;
@@ -42,6 +43,17 @@ impl SupernodeLayout {
         let n = symbolic.nrows();
         let mut begin = s.supernode_begin().to_vec();
         begin.push(*s.supernode_end().last()?);
+        // Contiguous supernodes tiling the columns (faer's layout; anything else is
+        // left to faer's own kernels).
+        if begin[0] != 0
+            || begin[ns] != n
+            || s.supernode_end()
+                .iter()
+                .zip(&begin[1..])
+                .any(|(e, b)| e != b)
+        {
+            return None;
+        }
         let row_ptr = s.col_ptr_for_row_idx().to_vec();
         let val_ptr = s.col_ptr_for_val().to_vec();
         let all_rows = s.row_idx();
@@ -64,6 +76,10 @@ impl SupernodeLayout {
         let mut count = vec![0usize; ns + 1];
         let mut parent = vec![usize::MAX; ns];
         for (d, parent_d) in parent.iter_mut().enumerate() {
+            // The kernels search the patterns: they must ascend (faer's do).
+            if !pattern(d).windows(2).all(|w| w[0] < w[1]) {
+                return None;
+            }
             let mut last = usize::MAX;
             for &r in pattern(d) {
                 let t = *col_super.get(r)?;
