@@ -10,7 +10,7 @@
 //! * methods: [`naive`] (uniform Laplacian coordinates, the baseline), [`poisson`]
 //!   (Yu et al. 2004), [`lse`] (Sorkine et al. 2004), [`implicit`] (Fu, ch. 2);
 //! * tools: [`coating`] (coating transfer), [`transplant`], [`denoise`];
-//! * [`detail_error`]: the normalised as-rigid-as-possible energy used to compare them.
+//! * [`detail_error()`]: the normalised as-rigid-as-possible energy used to compare them.
 
 pub mod basis;
 pub mod coating;
@@ -19,6 +19,7 @@ pub mod detail_error;
 pub mod frames;
 pub mod implicit;
 mod implicit_fit;
+mod implicit_systems;
 pub mod local;
 pub mod lse;
 pub mod naive;

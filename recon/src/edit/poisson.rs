@@ -28,7 +28,7 @@
 //!
 //! A move ([`EditMethod::solve`]) runs the same arithmetic, allocating only its result, in the
 //! factor's row order, with the face maps of a single transform handle in closed form
-//! ([`super::poisson_rhs`]); [`PoissonEditor::vertex_transforms`],
+//! (`poisson_rhs.rs`); [`PoissonEditor::vertex_transforms`],
 //! [`PoissonEditor::face_maps`] and [`PoissonEditor::solve_with_face_maps`] are the plain
 //! steps, equal to it to round-off.
 

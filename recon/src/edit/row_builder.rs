@@ -78,7 +78,7 @@ impl RowBuilder {
     }
 
     /// The transpose of the matrix (`ncols × nrows`, column `i` is row `i` as pushed, rows
-    /// ascending), at no cost: what [`QuadTerm::a_t_w`] takes.
+    /// ascending), at no cost: what [`super::system::QuadTerm::a_t_w`] takes.
     pub fn finish_transposed(self) -> SparseMatrix {
         let nrows = self.nrows();
         SparseMatrix::new(

@@ -74,7 +74,7 @@ pub struct EditReport {
     pub factor_ms: f64,
     /// Solving for the specification's transforms, ms (LSE: re-fitting included).
     pub solve_ms: f64,
-    /// Normalised ARAP energy of the result over the ROI ([`detail_error`]).
+    /// Normalised ARAP energy of the result over the ROI ([`detail_error()`]).
     pub detail_error: f64,
 }
 

@@ -20,6 +20,7 @@
 //! and backward substitution, same factor layout as faer's).
 
 mod cholesky;
+mod cholesky_options;
 mod error;
 mod fixed;
 mod least_squares;
@@ -29,9 +30,10 @@ mod supernodal_numeric;
 mod supernodal_solve;
 mod supernode_tree;
 
-pub use cholesky::{
-    CholeskyOptions, CholeskySolver, FactorMode, Factorization, FillOrdering, SharedRhs,
-    SolveKernel, SubtreeThreads, ND_MIN_DIM,
+pub use cholesky::{CholeskySolver, SharedRhs};
+pub use cholesky_options::{
+    CholeskyOptions, FactorMode, Factorization, FillOrdering, SolveKernel, SubtreeThreads,
+    ND_MIN_DIM,
 };
 pub use error::SolveError;
 pub use fixed::FixedSolver;

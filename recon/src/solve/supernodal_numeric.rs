@@ -164,7 +164,8 @@ pub(crate) fn factorize_supernodal_llt(
     let len = symbolic.len_val();
     if values.len() != len {
         // Zeroed lazily by the allocator, so its pages are first touched by the thread
-        // that fills them (every block is zeroed again before it is assembled).
+        // that fills them (every block is zeroed again before it is assembled); the old
+        // array is freed first.
         *values = Vec::new();
         *values = vec![0.0; len];
     }
