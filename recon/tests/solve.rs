@@ -4,22 +4,24 @@ use faer::Mat;
 use fires_recon::generate::plane_grid;
 use fires_recon::operators::cotan_matrix;
 use fires_recon::solve::*;
+use fires_recon::SurfaceMesh;
+
+/// The cotangent stiffness `K = −C` of a mesh (symmetric positive semidefinite).
+fn stiffness(m: &SurfaceMesh) -> SparseMatrix {
+    let c = cotan_matrix(m).unwrap();
+    let t: Vec<_> = sparse_triplets(c.as_ref())
+        .into_iter()
+        .map(|(i, j, v)| (i, j, -v))
+        .collect();
+    sparse_from_triplets(c.nrows(), c.ncols(), &t).unwrap()
+}
 
 #[test]
 fn dirichlet_solve_reproduces_a_harmonic_function() {
     // f = x² − y² + 3xy + x is harmonic; the cotan Laplacian reproduces quadratics only
     // approximately, so use a linear function for exactness and a quadratic for convergence.
     let m = plane_grid(30, 30, 1.0, 1.0, false);
-    let c = cotan_matrix(&m).unwrap();
-    let k = sparse_from_triplets(
-        c.nrows(),
-        c.ncols(),
-        &sparse_triplets(c.as_ref())
-            .into_iter()
-            .map(|(i, j, v)| (i, j, -v))
-            .collect::<Vec<_>>(),
-    )
-    .unwrap();
+    let k = stiffness(&m);
     let boundary: Vec<usize> = m
         .vertices()
         .filter(|&v| m.is_boundary_vertex(v))
@@ -64,16 +66,7 @@ fn fixed_solver_with_a_given_order_solves_as_with_its_own() {
     // on the mesh graph (over all vertices, the fixed ones skipped) or by any permutation:
     // the solution is the default order's; an order missing a free vertex is an error.
     let m = plane_grid(30, 30, 1.0, 1.0, false);
-    let c = cotan_matrix(&m).unwrap();
-    let k = sparse_from_triplets(
-        c.nrows(),
-        c.ncols(),
-        &sparse_triplets(c.as_ref())
-            .into_iter()
-            .map(|(i, j, v)| (i, j, -v))
-            .collect::<Vec<_>>(),
-    )
-    .unwrap();
+    let k = stiffness(&m);
     let fixed: Vec<bool> = m.vertices().map(|v| m.is_boundary_vertex(v)).collect();
     let boundary: Vec<usize> = (0..fixed.len()).filter(|&v| fixed[v]).collect();
     let rings: Vec<Vec<usize>> = m

@@ -130,14 +130,7 @@ impl CholeskySolver {
             FillOrdering::Auto => {
                 // Both analyses, concurrently (they are independent and neither wins on
                 // every mesh); the smaller factor is the cheaper factorisation and solve.
-                let (amd, nd) = std::thread::scope(|scope| {
-                    let nd = scope.spawn(|| symbolic_with(true));
-                    let amd = symbolic_with(false);
-                    let nd = nd
-                        .join()
-                        .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-                    (amd, nd)
-                });
+                let (amd, nd) = super::join(|| symbolic_with(false), || symbolic_with(true));
                 let (amd, nd) = (amd?, nd?);
                 if nd.len_val() < amd.len_val() {
                     nd
@@ -482,7 +475,7 @@ impl CholeskySolver {
     /// The split the substitutions use, if solves are to use two threads.
     fn solve_split(&self) -> Option<&SubtreeSplit> {
         (self.options.threads == SubtreeThreads::FactorAndSolve)
-            .then(|| self.tree.as_ref()?.solve_split.as_ref())
+            .then(|| self.share_split())
             .flatten()
     }
 

@@ -43,3 +43,19 @@ pub use sparse::{
     lower_product_sum, sparse_from_triplets, sparse_mul_dense, sparse_triplets, transpose,
     weighted_gram, ProductTerm, SparseMatrix,
 };
+
+/// Runs `here` on this thread and `there` on a second one, and returns both results (a
+/// panic on the second thread is resumed here).
+pub(crate) fn join<A, B: Send>(
+    here: impl FnOnce() -> A,
+    there: impl FnOnce() -> B + Send,
+) -> (A, B) {
+    std::thread::scope(|scope| {
+        let other = scope.spawn(there);
+        let a = here();
+        let b = other
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (a, b)
+    })
+}

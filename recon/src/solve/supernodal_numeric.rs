@@ -30,7 +30,7 @@ use faer::sparse::linalg::cholesky::SymbolicCholesky;
 use faer::sparse::SparseColMatRef;
 use faer::{Accum, MatMut, MatRef, Par, Side};
 
-use super::supernode_tree::{SubtreeSplit, SupernodeLayout};
+use super::supernode_tree::{SubtreeSlice, SubtreeSplit, SupernodeLayout};
 use super::SolveError;
 
 /// Below this many multiply-adds an update is a plain loop; from it, a faer product into
@@ -180,39 +180,13 @@ pub(crate) fn factorize_supernodal_llt(
         return factor_range(layout, &lower, 0..ns, 0, values, &mut scratch, None);
     };
     let mut helper = Scratch::new(n, max_width)?;
-    // Cut the values into per-range slices in supernode order, each given to its bin.
-    let mut ranges: Vec<(usize, Range<usize>)> = split
-        .bins
-        .iter()
-        .enumerate()
-        .flat_map(|(b, rs)| rs.iter().map(move |r| (b, r.clone())))
-        .collect();
-    ranges.sort_by_key(|(_, r)| r.start);
-    type Job<'v> = (Range<usize>, &'v mut [f64]);
-    let mut jobs: [Vec<Job<'_>>; 2] = [Vec::new(), Vec::new()];
-    let mut left: &mut [f64] = values;
-    let mut at = 0;
-    for (b, r) in ranges {
-        let (_, tail) = std::mem::take(&mut left).split_at_mut(layout.val_ptr[r.start] - at);
-        let (mine, tail) = tail.split_at_mut(layout.val_ptr[r.end] - layout.val_ptr[r.start]);
-        at = layout.val_ptr[r.end];
-        jobs[b].push((r, mine));
-        left = tail;
-    }
-    let [jobs0, jobs1] = jobs;
-    let run = |jobs: Vec<Job<'_>>, scratch: &mut Scratch| {
-        jobs.into_iter().try_for_each(|(r, v)| {
+    let [jobs0, jobs1] = split.cut(values, |r| layout.val_ptr[r.start]..layout.val_ptr[r.end]);
+    let run = |jobs: Vec<SubtreeSlice<'_, f64>>, scratch: &mut Scratch| {
+        jobs.into_iter().try_for_each(|(r, _, v)| {
             factor_range(layout, &lower, r.clone(), r.start, v, scratch, None)
         })
     };
-    let (r0, r1) = std::thread::scope(|scope| {
-        let other = scope.spawn(|| run(jobs1, &mut helper));
-        let r0 = run(jobs0, &mut scratch);
-        let r1 = other
-            .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        (r0, r1)
-    });
+    let (r0, r1) = super::join(|| run(jobs0, &mut scratch), || run(jobs1, &mut helper));
     r0?;
     r1?;
     // The rest, in order: maximal runs of supernodes outside the bins.
@@ -275,7 +249,14 @@ fn factor_range(
         }
         let target = Target { start, end, nrows };
         let ups = layout.upd_ptr[s]..layout.upd_ptr[s + 1];
-        let descendant = |d: usize| &head[layout.val_ptr[d] - off0..layout.val_ptr[d + 1] - off0];
+        // Subtracts the updates `layout.upd[k]`, `k` in `which`, from `block`.
+        let updates =
+            |which: Range<usize>, block: &mut [f64], g2l: &[usize], up: &mut UpdateScratch| {
+                for &d in &layout.upd[which] {
+                    let ld = &head[layout.val_ptr[d] - off0..layout.val_ptr[d + 1] - off0];
+                    update(layout, d, ld, target, block, g2l, up);
+                }
+            };
         let shared = helper
             .as_deref_mut()
             .filter(|_| layout.work[s] >= SHARED_NODE_WORK);
@@ -296,29 +277,12 @@ fn factor_range(
                 h.map_pattern(pattern, w);
                 h.block.clear();
                 h.block.resize(nrows * w, 0.0);
-                let (g2l, up, block) = (&h.global_to_local, &mut h.update, &mut h.block);
-                std::thread::scope(|scope| {
-                    let other = scope.spawn(|| {
-                        for &d in &layout.upd[cut..ups.end] {
-                            update(layout, d, descendant(d), target, block, g2l, up);
-                        }
-                    });
-                    for &d in &layout.upd[ups.start..cut] {
-                        let g2l = &scratch.global_to_local;
-                        update(
-                            layout,
-                            d,
-                            descendant(d),
-                            target,
-                            ls,
-                            g2l,
-                            &mut scratch.update,
-                        );
-                    }
-                    other
-                        .join()
-                        .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-                });
+                let (g2l, up) = (&scratch.global_to_local, &mut scratch.update);
+                let (h_g2l, h_up, block) = (&h.global_to_local, &mut h.update, &mut h.block);
+                super::join(
+                    || updates(ups.start..cut, ls, g2l, up),
+                    || updates(cut..ups.end, block, h_g2l, h_up),
+                );
                 for (x, &y) in ls.iter_mut().zip(h.block.iter()) {
                     *x += y;
                 }
@@ -330,18 +294,7 @@ fn factor_range(
                 }
             }
             None => {
-                for &d in &layout.upd[ups] {
-                    let g2l = &scratch.global_to_local;
-                    update(
-                        layout,
-                        d,
-                        descendant(d),
-                        target,
-                        ls,
-                        g2l,
-                        &mut scratch.update,
-                    );
-                }
+                updates(ups, ls, &scratch.global_to_local, &mut scratch.update);
                 Par::Seq
             }
         };

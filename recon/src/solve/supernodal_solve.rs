@@ -16,8 +16,6 @@
 //! arithmetic operations*, 1988, applied to the etree). The others stay zero, so skipping
 //! them changes no value; the backward substitution still reads the whole factor.
 
-use std::ops::Range;
-
 use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
@@ -26,7 +24,7 @@ use faer::reborrow::ReborrowMut;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 
-use super::supernode_tree::SubtreeSplit;
+use super::supernode_tree::{SubtreeSlice, SubtreeSplit};
 
 /// One supernode: first column, width, its below-diagonal row pattern and its values
 /// (column-major, `width + pattern.len()` rows).
@@ -303,14 +301,7 @@ fn forward<const K: usize>(
         }
         spill
     };
-    let (spill0, spill1) = std::thread::scope(|scope| {
-        let other = scope.spawn(|| run(jobs1));
-        let spill0 = run(jobs0);
-        let spill1 = other
-            .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        (spill0, spill1)
-    });
+    let (spill0, spill1) = super::join(|| run(jobs0), || run(jobs1));
     for ((x, a), b) in w.iter_mut().zip(&spill0).zip(&spill1) {
         for c in 0..K {
             x[c] -= a[c] + b[c];
@@ -363,37 +354,19 @@ fn forward_node<const K: usize>(
     }
 }
 
-/// One subtree range of a thread: its supernodes, its first row and its rows of `w`.
-type Job<'w, const K: usize> = (Range<usize>, usize, &'w mut [[f64; K]]);
-
 /// The rows of `w` cut into each subtree range's own slice, grouped by thread.
 fn subtree_jobs<'w, const K: usize>(
     nodes: &[Supernode<'_>],
     split: &SubtreeSplit,
     w: &'w mut [[f64; K]],
 ) -> [Vec<Job<'w, K>>; 2] {
-    let cols =
-        |r: &Range<usize>| nodes[r.start].start..nodes[r.end - 1].start + nodes[r.end - 1].width;
-    let mut ranges: Vec<(usize, Range<usize>)> = split
-        .bins
-        .iter()
-        .enumerate()
-        .flat_map(|(b, rs)| rs.iter().map(move |r| (b, r.clone())))
-        .collect();
-    ranges.sort_by_key(|(_, r)| r.start);
-    let mut jobs: [Vec<Job<'w, K>>; 2] = [Vec::new(), Vec::new()];
-    let mut left: &'w mut [[f64; K]] = w;
-    let mut at = 0;
-    for (b, r) in ranges {
-        let c = cols(&r);
-        let (_, tail) = std::mem::take(&mut left).split_at_mut(c.start - at);
-        let (mine, tail) = tail.split_at_mut(c.len());
-        at = c.end;
-        jobs[b].push((r, c.start, mine));
-        left = tail;
-    }
-    jobs
+    split.cut(w, |r| {
+        nodes[r.start].start..nodes[r.end - 1].start + nodes[r.end - 1].width
+    })
 }
+
+/// One subtree range of a thread: its supernodes, its first row and its rows of `w`.
+type Job<'w, const K: usize> = SubtreeSlice<'w, [f64; K]>;
 
 /// `Lᵀ x = y`: the supernodes in reverse. With a `split`, the supernodes outside its
 /// subtrees first, then the two sets of subtrees on two threads: a subtree's supernodes
@@ -425,13 +398,7 @@ fn backward<const K: usize>(
             }
         }
     };
-    std::thread::scope(|scope| {
-        let other = scope.spawn(|| run(jobs1));
-        run(jobs0);
-        other
-            .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-    });
+    super::join(|| run(jobs0), || run(jobs1));
 }
 
 /// Scratch of [`backward_node`].

@@ -7,6 +7,8 @@
 //! separators, so whole subtrees can be factored (or, in a backward substitution, solved)
 //! concurrently; the separators above them, the rest, come after (before, backward).
 
+use std::ops::Range;
+
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 
 /// The supernodal structure in plain arrays, with each supernode's updating descendants.
@@ -163,12 +165,45 @@ pub(crate) const MIN_SPLIT_WORK: f64 = 1e6;
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct SubtreeSplit {
     /// Supernode ranges of each thread, ascending.
-    pub bins: [Vec<std::ops::Range<usize>>; 2],
+    pub bins: [Vec<Range<usize>>; 2],
     /// Estimated cost: the heavier bin plus the rest, relative to the sequential total.
     pub cost: f64,
 }
 
+/// One subtree range of a thread: its supernodes, where its slice starts in the array
+/// cut, and the slice.
+pub(crate) type SubtreeSlice<'a, T> = (Range<usize>, usize, &'a mut [T]);
+
 impl SubtreeSplit {
+    /// `data` cut into each subtree range's own slice, grouped by thread; `extent(r)` is
+    /// the part of `data` the supernodes `r` own (consecutive ranges own consecutive
+    /// parts), e.g. their values or their rows.
+    pub(crate) fn cut<'a, T>(
+        &self,
+        data: &'a mut [T],
+        extent: impl Fn(&Range<usize>) -> Range<usize>,
+    ) -> [Vec<SubtreeSlice<'a, T>>; 2] {
+        let mut ranges: Vec<(usize, Range<usize>)> = self
+            .bins
+            .iter()
+            .enumerate()
+            .flat_map(|(b, rs)| rs.iter().map(move |r| (b, r.clone())))
+            .collect();
+        ranges.sort_by_key(|(_, r)| r.start);
+        let mut out: [Vec<SubtreeSlice<'a, T>>; 2] = [Vec::new(), Vec::new()];
+        let mut left: &'a mut [T] = data;
+        let mut at = 0;
+        for (b, r) in ranges {
+            let e = extent(&r);
+            let (_, tail) = std::mem::take(&mut left).split_at_mut(e.start - at);
+            let (mine, tail) = tail.split_at_mut(e.len());
+            at = e.end;
+            out[b].push((r, e.start, mine));
+            left = tail;
+        }
+        out
+    }
+
     /// Per supernode (of `len`): whether it is in one of the two sets of subtrees.
     pub(crate) fn in_bins(&self, len: usize) -> Vec<bool> {
         let mut in_bin = vec![false; len];
@@ -258,7 +293,7 @@ impl SubtreeSplit {
         if cost >= 0.9 * total {
             return None;
         }
-        let mut bins: [Vec<std::ops::Range<usize>>; 2] = [Vec::new(), Vec::new()];
+        let mut bins: [Vec<Range<usize>>; 2] = [Vec::new(), Vec::new()];
         for (&r, &b) in front.iter().zip(&side) {
             bins[usize::from(b)].push(r + 1 - size[r]..r + 1);
         }
