@@ -184,8 +184,7 @@ fn least_squares_of_stacked_constraints() {
 
 #[test]
 fn supernodal_and_simplicial_factors_agree_on_a_mesh_laplacian() {
-    // The 70x70 grid's top separator is wider than 32 columns, so the dense-kernel branch
-    // of the hybrid supernodal solve runs too.
+    // The 70x70 grid's top separator is 70 columns wide: many four-column blocks.
     for m in [
         fires_recon::generate::icosphere(4, 1.0),
         plane_grid(70, 70, 1.0, 1.0, false),

@@ -28,8 +28,8 @@ pub enum FactorMode {
 /// Which triangular-solve kernel a supernodal LLᵀ factor uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SolveKernel {
-    /// The hybrid column-wise/dense solve of `supernodal_solve` for sequential LLᵀ
-    /// supernodal factors, faer's solve otherwise.
+    /// The column-blocked solve of `supernodal_solve` for sequential LLᵀ supernodal
+    /// factors, faer's solve otherwise.
     #[default]
     Auto,
     /// Always faer's solve.

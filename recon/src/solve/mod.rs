@@ -21,6 +21,7 @@
 
 mod cholesky;
 mod cholesky_options;
+mod column_kernels;
 mod error;
 mod fixed;
 mod least_squares;

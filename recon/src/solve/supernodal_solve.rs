@@ -1,13 +1,12 @@
-//! Triangular solves with a supernodal LLᵀ factor, column by column.
+//! Triangular solves with a supernodal LLᵀ factor, straight from faer's supernodal storage.
 //!
-//! faer's supernodal solve runs a small dense TRSM + GEMM per supernode; on mesh
-//! Laplacians (tens of thousands of supernodes, most 1–15 columns wide) and 1–4
-//! right-hand sides that per-call overhead dominates. Here narrow supernodes are solved
-//! column by column straight from faer's supernodal storage (gathering/scattering the
-//! below-diagonal rows once per supernode) and only supernodes of ≥ 32 columns use faer's
-//! dense kernels. The right-hand sides are
-//! processed `K ≤ 4` at a time, interleaved row-major so each row update touches one
-//! cache line.
+//! faer's supernodal solve runs a small dense TRSM + GEMM per supernode; on mesh systems
+//! (thousands of supernodes, most a few to a few hundred columns wide) and 1–4
+//! right-hand sides its per-call overhead and the packing of each block for the product
+//! dominate. Here every supernode is solved by the register-blocked kernels of
+//! [`super::column_kernels`] (four columns at a time), gathering and scattering its
+//! below-diagonal rows once. The right-hand sides are processed `K ≤ 4` at a time,
+//! interleaved row-major (three travel in four lanes) so a row is one vector.
 //!
 //! A right-hand side with few nonzero rows (an editing move changes only its handles'
 //! rows) is forward-substituted over the supernodes that can receive a nonzero: the
@@ -16,14 +15,11 @@
 //! arithmetic operations*, 1988, applied to the etree). The others stay zero, so skipping
 //! them changes no value; the backward substitution still reads the whole factor.
 
-use faer::linalg::matmul::matmul;
-use faer::linalg::triangular_solve::{
-    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
-};
 use faer::reborrow::ReborrowMut;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
-use faer::{Accum, Mat, MatMut, MatRef, Par};
+use faer::{Mat, MatMut, MatRef};
 
+use super::column_kernels::{backward_supernode, forward_supernode, simd};
 use super::supernode_tree::{SubtreeSlice, SubtreeSplit};
 
 /// One supernode: first column, width, its below-diagonal row pattern and its values
@@ -107,7 +103,7 @@ pub(crate) fn solve_supernodal_llt_plus(
         match k {
             1 => solve_block::<1>(&nodes, fwd, inv, block, base, split),
             2 => solve_block::<2>(&nodes, fwd, inv, block, base, split),
-            3 => solve_block::<3>(&nodes, fwd, inv, block, base, split),
+            // Three columns travel in four lanes: a row is then one 256-bit vector.
             _ => solve_block::<4>(&nodes, fwd, inv, block, base, split),
         }
         col += k;
@@ -129,22 +125,23 @@ pub(crate) fn forward_supernodal_llt(
     while col < b.ncols() {
         let k = (b.ncols() - col).min(4);
         match k {
-            1 => forward_columns::<1>(symbolic, &nodes, b, col, out.as_mut(), split),
-            2 => forward_columns::<2>(symbolic, &nodes, b, col, out.as_mut(), split),
-            3 => forward_columns::<3>(symbolic, &nodes, b, col, out.as_mut(), split),
-            _ => forward_columns::<4>(symbolic, &nodes, b, col, out.as_mut(), split),
+            1 => forward_columns::<1>(symbolic, &nodes, b, col, k, out.as_mut(), split),
+            2 => forward_columns::<2>(symbolic, &nodes, b, col, k, out.as_mut(), split),
+            _ => forward_columns::<4>(symbolic, &nodes, b, col, k, out.as_mut(), split),
         }
         col += k;
     }
     Some(out)
 }
 
-/// Columns `col..col + K` of [`forward_supernodal_llt`], in one sweep over the factor.
+/// Columns `col..col + kc` (`kc ≤ K`) of [`forward_supernodal_llt`], in one sweep over
+/// the factor (lanes past `kc` carry zeros).
 fn forward_columns<const K: usize>(
     symbolic: &SymbolicCholesky<usize>,
     nodes: &[Supernode<'_>],
     b: MatRef<'_, f64>,
     col: usize,
+    kc: usize,
     mut out: MatMut<'_, f64>,
     split: Option<&SubtreeSplit>,
 ) {
@@ -152,15 +149,21 @@ fn forward_columns<const K: usize>(
     let mut w: Vec<[f64; K]> = (0..b.nrows())
         .map(|k| {
             let i = fwd.map_or(k, |f| f[k]);
-            std::array::from_fn(|c| b[(i, col + c)])
+            lanes(|c| b[(i, col + c)], kc)
         })
         .collect();
     forward(nodes, &mut w, split);
     for (k, v) in w.iter().enumerate() {
-        for (c, &x) in v.iter().enumerate() {
+        for (c, &x) in v.iter().enumerate().take(kc) {
             out[(k, col + c)] = x;
         }
     }
+}
+
+/// A row of `K` lanes holding `value(c)` in its first `kc` lanes and zeros after.
+#[inline(always)]
+fn lanes<const K: usize>(value: impl Fn(usize) -> f64, kc: usize) -> [f64; K] {
+    std::array::from_fn(|c| if c < kc { value(c) } else { 0.0 })
 }
 
 /// Solves `L Lᵀ y = w` in place for `K` interleaved right-hand sides whose rows are already
@@ -195,6 +198,7 @@ fn forward_reach<const K: usize>(
     }
 }
 
+/// Solves for the columns of `rhs` (at most `K`; lanes past them carry zeros).
 fn solve_block<const K: usize>(
     nodes: &[Supernode<'_>],
     fwd: &[usize],
@@ -203,24 +207,25 @@ fn solve_block<const K: usize>(
     shared: Option<MatRef<'_, f64>>,
     split: Option<&SubtreeSplit>,
 ) {
+    let kc = rhs.ncols();
     // Gather and scatter read `rhs` and `w` in order and write through the permutation
     // (independent stores instead of dependent random loads).
     let mut w: Vec<[f64; K]> = vec![[0.0; K]; fwd.len()];
     for (i, &p) in inv.iter().enumerate() {
-        w[p] = std::array::from_fn(|c| rhs[(i, c)]);
+        w[p] = lanes(|c| rhs[(i, c)], kc);
     }
     forward_reach(nodes, &mut w, split);
     if let Some(b) = shared {
         for (k, r) in w.iter_mut().enumerate() {
-            for (c, v) in r.iter_mut().enumerate() {
+            for (c, v) in r.iter_mut().enumerate().take(kc) {
                 *v += b[(k, c)];
             }
         }
     }
     backward(nodes, &mut w, split);
     for (r, &f) in w.iter().zip(fwd) {
-        for c in 0..K {
-            rhs[(f, c)] = r[c];
+        for (c, &v) in r.iter().enumerate().take(kc) {
+            rhs[(f, c)] = v;
         }
     }
 }
@@ -266,56 +271,73 @@ fn reach<const K: usize>(nodes: &[Supernode<'_>], w: &[[f64; K]]) -> Option<Vec<
 
 /// [`forward`] over the supernodes `visit` only (ascending; all others hold zeros).
 fn forward_on<const K: usize>(nodes: &[Supernode<'_>], w: &mut [[f64; K]], visit: &[usize]) {
-    let mut tmp: Vec<[f64; K]> = Vec::new();
-    for &k in visit {
-        forward_node(&nodes[k], w, 0, &mut [], &mut tmp);
-    }
+    simd(
+        #[inline(always)]
+        || {
+            let mut tmp: Vec<[f64; K]> = Vec::new();
+            for &k in visit {
+                forward_node(&nodes[k], w, 0, &mut [], &mut tmp);
+            }
+        },
+    )
 }
 
-/// `L y = b`: per supernode, a dense triangular solve on the diagonal block, then the
-/// block's contribution to its pattern rows accumulated contiguously and scattered once.
-/// With a `split`, the two sets of subtrees first, on two threads (each spills its
-/// contributions to rows outside its subtrees, which belong to the rest, into its own
-/// array, added after), then the rest in order.
+/// `L y = b`: per supernode, the triangular solve on its diagonal block, then the block's
+/// contribution to its pattern rows accumulated contiguously and scattered once
+/// ([`forward_supernode`]). With a `split`, the two sets of subtrees first, on two
+/// threads (each spills its contributions to rows outside its subtrees, which belong to
+/// the rest, into its own array, added after), then the rest in order.
 fn forward<const K: usize>(
     nodes: &[Supernode<'_>],
     w: &mut [[f64; K]],
     split: Option<&SubtreeSplit>,
 ) {
-    let mut tmp: Vec<[f64; K]> = Vec::new();
+    let sweep = |nodes: &mut dyn Iterator<Item = &Supernode<'_>>, w: &mut [[f64; K]]| {
+        simd(
+            #[inline(always)]
+            || {
+                let mut tmp: Vec<[f64; K]> = Vec::new();
+                for s in nodes {
+                    forward_node(s, w, 0, &mut [], &mut tmp);
+                }
+            },
+        )
+    };
     let Some(split) = split else {
-        for s in nodes {
-            forward_node(s, w, 0, &mut [], &mut tmp);
-        }
-        return;
+        return sweep(&mut nodes.iter(), w);
     };
     let n = w.len();
     let [jobs0, jobs1] = subtree_jobs(nodes, split, w);
     let run = |jobs: Vec<Job<'_, K>>| {
-        let mut tmp: Vec<[f64; K]> = Vec::new();
-        let mut spill = vec![[0.0; K]; n];
-        for (r, c0, own) in jobs {
-            for s in &nodes[r] {
-                forward_node(s, own, c0, &mut spill, &mut tmp);
-            }
-        }
-        spill
+        simd(
+            #[inline(always)]
+            || {
+                let mut tmp: Vec<[f64; K]> = Vec::new();
+                let mut spill = vec![[0.0; K]; n];
+                for (r, c0, own) in jobs {
+                    for s in &nodes[r] {
+                        forward_node(s, own, c0, &mut spill, &mut tmp);
+                    }
+                }
+                spill
+            },
+        )
     };
     let (spill0, spill1) = super::join(|| run(jobs0), || run(jobs1));
     for ((x, a), b) in w.iter_mut().zip(&spill0).zip(&spill1) {
         for c in 0..K {
-            x[c] -= a[c] + b[c];
+            x[c] += a[c] + b[c];
         }
     }
     let in_bin = split.in_bins(nodes.len());
-    for (s, _) in nodes.iter().zip(&in_bin).filter(|(_, &b)| !b) {
-        forward_node(s, w, 0, &mut [], &mut tmp);
-    }
+    let mut rest = nodes.iter().zip(in_bin).filter(|(_, b)| !b).map(|(s, _)| s);
+    sweep(&mut rest, w);
 }
 
 /// One supernode's step of the forward substitution. `own` holds the rows from `c0` on
 /// (the supernode's columns among them); a contribution `t` to a row `r` outside it is
-/// added to `spill[r]` instead (to be subtracted later). `tmp` is scratch.
+/// added to `spill[r]` instead (to be added to `r` later). `tmp` is scratch.
+#[inline(always)]
 fn forward_node<const K: usize>(
     s: &Supernode<'_>,
     own: &mut [[f64; K]],
@@ -324,32 +346,15 @@ fn forward_node<const K: usize>(
     tmp: &mut Vec<[f64; K]>,
 ) {
     let start = s.start - c0;
-    if s.width >= DENSE_WIDTH {
-        forward_dense(s, own, start, tmp);
-    } else {
-        let rows = s.width + s.pattern.len();
-        tmp.clear();
-        tmp.resize(s.pattern.len(), [0.0; K]);
-        for jj in 0..s.width {
-            let col = &s.values[jj * rows..(jj + 1) * rows];
-            let mut xj = own[start + jj];
-            for v in &mut xj {
-                *v /= col[jj];
-            }
-            own[start + jj] = xj;
-            let (block, below) = col.split_at(s.width);
-            for (ii, &l) in block.iter().enumerate().skip(jj + 1) {
-                sub_scaled(&mut own[start + ii], l, &xj);
-            }
-            for (t, &l) in tmp.iter_mut().zip(below) {
-                sub_scaled(t, -l, &xj);
-            }
-        }
-    }
+    tmp.resize(s.pattern.len(), [0.0; K]);
+    forward_supernode(s.values, s.width, &mut own[start..start + s.width], tmp);
     for (&r, t) in s.pattern.iter().zip(tmp.iter()) {
-        match r.checked_sub(c0).and_then(|i| own.get_mut(i)) {
-            Some(x) => sub_scaled(x, 1.0, t),
-            None => sub_scaled(&mut spill[r], -1.0, t),
+        let x = match r.checked_sub(c0).and_then(|i| own.get_mut(i)) {
+            Some(x) => x,
+            None => &mut spill[r],
+        };
+        for c in 0..K {
+            x[c] += t[c];
         }
     }
 }
@@ -368,188 +373,76 @@ fn subtree_jobs<'w, const K: usize>(
 /// One subtree range of a thread: its supernodes, its first row and its rows of `w`.
 type Job<'w, const K: usize> = SubtreeSlice<'w, [f64; K]>;
 
-/// `Lᵀ x = y`: the supernodes in reverse. With a `split`, the supernodes outside its
-/// subtrees first, then the two sets of subtrees on two threads: a subtree's supernodes
-/// read only rows of their own subtree and of the rest, which is final by then.
+/// `Lᵀ x = y`: the supernodes in reverse ([`backward_supernode`]). With a `split`, the
+/// supernodes outside its subtrees first, then the two sets of subtrees on two threads: a
+/// subtree's supernodes read only rows of their own subtree and of the rest, which is
+/// final by then.
 fn backward<const K: usize>(
     nodes: &[Supernode<'_>],
     w: &mut [[f64; K]],
     split: Option<&SubtreeSplit>,
 ) {
-    let mut scratch = BackwardScratch::default();
+    let sweep = |nodes: &mut dyn Iterator<Item = &Supernode<'_>>, w: &mut [[f64; K]]| {
+        simd(
+            #[inline(always)]
+            || {
+                let mut tmp: Vec<[f64; K]> = Vec::new();
+                for s in nodes {
+                    backward_node(s, w, 0, &[], &mut tmp);
+                }
+            },
+        )
+    };
     let Some(split) = split else {
-        for s in nodes.iter().rev() {
-            backward_node(s, w, 0, &[], &mut scratch);
-        }
-        return;
+        return sweep(&mut nodes.iter().rev(), w);
     };
     let in_bin = split.in_bins(nodes.len());
-    for (s, _) in nodes.iter().zip(&in_bin).rev().filter(|(_, &b)| !b) {
-        backward_node(s, w, 0, &[], &mut scratch);
-    }
+    let mut rest = nodes
+        .iter()
+        .zip(in_bin)
+        .rev()
+        .filter(|(_, b)| !b)
+        .map(|(s, _)| s);
+    sweep(&mut rest, w);
     let frozen = w.to_vec();
     let [jobs0, jobs1] = subtree_jobs(nodes, split, w);
     let frozen = &frozen;
     let run = |jobs: Vec<Job<'_, K>>| {
-        let mut scratch = BackwardScratch::default();
-        for (r, c0, own) in jobs {
-            for s in nodes[r].iter().rev() {
-                backward_node(s, own, c0, frozen, &mut scratch);
-            }
-        }
+        simd(
+            #[inline(always)]
+            || {
+                let mut tmp: Vec<[f64; K]> = Vec::new();
+                for (r, c0, own) in jobs {
+                    for s in nodes[r].iter().rev() {
+                        backward_node(s, own, c0, frozen, &mut tmp);
+                    }
+                }
+            },
+        )
     };
     super::join(|| run(jobs0), || run(jobs1));
 }
 
-/// Scratch of [`backward_node`].
-#[derive(Default)]
-struct BackwardScratch<const K: usize> {
-    tmp: Vec<[f64; K]>,
-    below_dots: Vec<[f64; K]>,
-}
-
 /// One supernode's step of the backward substitution. `own` holds the rows from `c0` on
 /// (the supernode's own columns among them); rows outside it are read from `frozen`.
+/// `tmp` is scratch.
+#[inline(always)]
 fn backward_node<const K: usize>(
     s: &Supernode<'_>,
     own: &mut [[f64; K]],
     c0: usize,
     frozen: &[[f64; K]],
-    scratch: &mut BackwardScratch<K>,
-) {
-    let row = |own: &[[f64; K]], r: usize| match r.checked_sub(c0).and_then(|i| own.get(i)) {
-        Some(v) => *v,
-        None => frozen[r],
-    };
-    let start = s.start - c0;
-    if s.width >= DENSE_WIDTH {
-        let below = Mat::from_fn(s.pattern.len(), K, |p, c| row(own, s.pattern[p])[c]);
-        backward_dense(s, own, start, below.as_ref());
-        return;
-    }
-    let rows = s.width + s.pattern.len();
-    let BackwardScratch { tmp, below_dots } = scratch;
-    tmp.clear();
-    tmp.extend(s.pattern.iter().map(|&r| row(own, r)));
-    // The below-diagonal products need only the gathered rows: all of them first, in
-    // ascending column order, so the supernode's values stream through memory once in
-    // address order; then the triangular solve on the diagonal block, in reverse.
-    below_dots.clear();
-    below_dots.extend(
-        s.values
-            .chunks_exact(rows)
-            .map(|col| dot4(tmp, &col[s.width..])),
-    );
-    for jj in (0..s.width).rev() {
-        let block = &s.values[jj * rows..jj * rows + s.width];
-        let mut acc = own[start + jj];
-        let d = below_dots[jj];
-        for c in 0..K {
-            acc[c] -= d[c];
-        }
-        let d = dot4(&own[start + jj + 1..start + s.width], &block[jj + 1..]);
-        for c in 0..K {
-            acc[c] -= d[c];
-        }
-        for v in &mut acc {
-            *v /= block[jj];
-        }
-        own[start + jj] = acc;
-    }
-}
-
-/// `Σ lᵢ tᵢ` with four independent partial sums: a single running sum is one dependent
-/// multiply-add chain, bounded by its latency rather than by reading the factor (measured 8% of
-/// the solve on a 100k-vertex LSE system).
-#[inline(always)]
-fn dot4<const K: usize>(t: &[[f64; K]], l: &[f64]) -> [f64; K] {
-    let mut part = [[0.0; K]; 4];
-    let (tc, tr) = t.split_at(t.len() - t.len() % 4);
-    let (lc, lr) = l.split_at(tc.len().min(l.len()));
-    for (t4, l4) in tc.chunks_exact(4).zip(lc.chunks_exact(4)) {
-        for q in 0..4 {
-            for c in 0..K {
-                part[q][c] += l4[q] * t4[q][c];
-            }
-        }
-    }
-    let mut out = [0.0; K];
-    for (ti, &li) in tr.iter().zip(lr) {
-        for c in 0..K {
-            out[c] += li * ti[c];
-        }
-    }
-    for p in part {
-        for c in 0..K {
-            out[c] += p[c];
-        }
-    }
-    out
-}
-
-/// Supernodes at least this wide go through faer's dense TRSM/GEMM kernels.
-const DENSE_WIDTH: usize = 32;
-
-/// The diagonal block and the below-diagonal block of a supernode as faer views.
-fn blocks<'a>(s: &Supernode<'a>) -> (MatRef<'a, f64>, MatRef<'a, f64>) {
-    MatRef::from_column_major_slice(s.values, s.width + s.pattern.len(), s.width)
-        .split_at_row(s.width)
-}
-
-/// [`forward_node`] of a wide supernode through faer's dense kernels: `own` holds its
-/// columns from `start`; its contributions to its pattern rows are left in `tmp`.
-fn forward_dense<const K: usize>(
-    s: &Supernode<'_>,
-    own: &mut [[f64; K]],
-    start: usize,
     tmp: &mut Vec<[f64; K]>,
 ) {
-    let (top, bot) = blocks(s);
-    let mut xt = Mat::from_fn(s.width, K, |i, c| own[start + i][c]);
-    solve_lower_triangular_in_place(top, xt.as_mut(), Par::Seq);
-    let mut below = Mat::zeros(s.pattern.len(), K);
-    matmul(
-        below.as_mut(),
-        Accum::Replace,
-        bot,
-        xt.as_ref(),
-        1.0,
-        Par::Seq,
-    );
-    for i in 0..s.width {
-        own[start + i] = std::array::from_fn(|c| xt[(i, c)]);
-    }
     tmp.clear();
-    tmp.extend((0..s.pattern.len()).map(|p| std::array::from_fn(|c| below[(p, c)])));
-}
-
-/// [`backward_node`] of a wide supernode through faer's dense kernels: `own` holds its
-/// columns from `start`, `below` the values of its pattern rows.
-fn backward_dense<const K: usize>(
-    s: &Supernode<'_>,
-    own: &mut [[f64; K]],
-    start: usize,
-    below: MatRef<'_, f64>,
-) {
-    let (top, bot) = blocks(s);
-    let mut xt = Mat::from_fn(s.width, K, |i, c| own[start + i][c]);
-    matmul(
-        xt.as_mut(),
-        Accum::Add,
-        bot.transpose(),
-        below,
-        -1.0,
-        Par::Seq,
+    tmp.extend(
+        s.pattern
+            .iter()
+            .map(|&r| match r.checked_sub(c0).and_then(|i| own.get(i)) {
+                Some(v) => *v,
+                None => frozen[r],
+            }),
     );
-    solve_upper_triangular_in_place(top.transpose(), xt.as_mut(), Par::Seq);
-    for i in 0..s.width {
-        own[start + i] = std::array::from_fn(|c| xt[(i, c)]);
-    }
-}
-
-#[inline(always)]
-fn sub_scaled<const K: usize>(target: &mut [f64; K], l: f64, x: &[f64; K]) {
-    for c in 0..K {
-        target[c] -= l * x[c];
-    }
+    let start = s.start - c0;
+    backward_supernode(s.values, s.width, &mut own[start..start + s.width], tmp);
 }
