@@ -192,6 +192,13 @@ impl ImplicitEditor {
                 _ => self.displaced[l],
             })
             .collect();
+        let known = gather(&targets, self.first.known());
+        // Fixed gradients are the only right-hand sides besides the targets; without them
+        // both terms are zero (two dense n × 3 and 3n × 3 blocks not built per drag).
+        if !problem.handles.iter().any(|h| h.fix_gradient) {
+            let x = self.first.solve(&[None, None], known.as_ref())?;
+            return Ok(from_mat(x.as_ref()));
+        }
         let mut b_l = Mat::<f64>::zeros(n_roi, 3);
         let mut m_c = Mat::<f64>::zeros(3 * n_roi, 3);
         for i in 0..n_roi {
@@ -208,7 +215,6 @@ impl ImplicitEditor {
                 }
             }
         }
-        let known = gather(&targets, self.first.known());
         let x = self
             .first
             .solve(&[Some(b_l.as_ref()), Some(m_c.as_ref())], known.as_ref())?;
