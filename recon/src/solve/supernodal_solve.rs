@@ -181,8 +181,18 @@ pub(crate) fn solve_supernodal_llt_permuted<const K: usize>(
     let Some(nodes) = supernodes(symbolic, values) else {
         return false;
     };
-    forward_reach(&nodes, w, split);
-    backward(&nodes, w, split);
+    if K == 3 {
+        // In four lanes, as [`solve_supernodal_llt`] runs three columns.
+        let mut w4: Vec<[f64; 4]> = w.iter().map(|r| lanes(|c| r[c], K)).collect();
+        forward_reach(&nodes, &mut w4, split);
+        backward(&nodes, &mut w4, split);
+        for (r, v) in w.iter_mut().zip(&w4) {
+            r.copy_from_slice(&v[..K]);
+        }
+    } else {
+        forward_reach(&nodes, w, split);
+        backward(&nodes, w, split);
+    }
     true
 }
 
