@@ -37,6 +37,7 @@ mod pen_fit;
 mod pen_line;
 #[cfg(test)]
 mod pen_line_tests;
+mod pen_mono;
 mod pen_ray;
 mod pixel_noise;
 mod prior;

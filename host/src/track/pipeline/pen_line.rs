@@ -37,6 +37,7 @@
 use super::align::KeptFrame;
 use super::merged::segment_distance;
 use super::pen_fit::fit_pen_line;
+use super::pen_mono::mono_labellings;
 use super::pen_ray::ray_labellings;
 use super::safety::{PairView, MERGE_MARGIN};
 use super::{Tracker, TrackerConfig};
@@ -64,6 +65,11 @@ pub(super) struct LineOptions {
     pub(super) prior_min_cos: f64,
     /// Standard deviation of a spot's centroid, pixels (the pen-ray fit's covariance).
     pub(super) pixel_sigma: f64,
+    /// Try the clear camera's own pose when no plane labels the pen (`pipeline/pen_mono.rs`).
+    /// Off in the tracker: on webcam seeds 1-7 it recovers seed 3's boundary stroke (coverage
+    /// 0.862 -> 0.984) but its fitted points can lie mm off (seed 3's worst RMS 0.68 -> 1.04 mm,
+    /// seed 4's 0.91 -> 1.11 mm); see the measurements in `pipeline/pen_mono.rs`.
+    pub(super) mono_start: bool,
 }
 
 impl LineOptions {
@@ -76,6 +82,7 @@ impl LineOptions {
             min_sine: MIN_SINE,
             prior_min_cos: config.identify.prior_min_cos,
             pixel_sigma: config.correspondence.pixel_sigma,
+            mono_start: false,
         }
     }
 }
@@ -226,9 +233,41 @@ pub(super) fn label_pen_line(
             }
         }
     }
+    // No plane labels the pen: the clear camera's spots alone may (`pipeline/pen_mono.rs`).
+    if found.is_none() && options.mono_start {
+        found = unique_mono(pair, options, direction)?;
+    }
     // Only the unique labelling is fitted: a rival that the fit would reject still makes the
     // pair ambiguous.
     fit_pen_line(pair, options, found?)
+}
+
+/// The one labelling that the clear camera's pose alone gives (`pipeline/pen_mono.rs`): Some(None)
+/// when there is none, None when there are several.
+fn unique_mono(
+    pair: &PairView<'_>,
+    options: &LineOptions,
+    direction: Option<&Vector3<f64>>,
+) -> Option<Option<LineLabelling>> {
+    let mut found: Option<LineLabelling> = None;
+    for crowded in [CameraId::Left, CameraId::Right] {
+        let clear = other(crowded);
+        let (norm_c, norm_k) = (normals(pair, crowded), normals(pair, clear));
+        if norm_k.len() < 3 || norm_c.is_empty() {
+            continue;
+        }
+        let gate_k = options.gate_px / pair.rig.camera(clear).focal_px();
+        for set_k in collinear_sets(norm_k, gate_k, 3) {
+            for l in mono_labellings(pair, options, crowded, set_k, direction) {
+                match &found {
+                    None => found = Some(l),
+                    Some(f) if same_labels(f, &l) => {}
+                    Some(_) => return None,
+                }
+            }
+        }
+    }
+    Some(found)
 }
 
 pub(super) fn other(camera: CameraId) -> CameraId {
@@ -283,7 +322,7 @@ fn collinear_sets(points: &[[f64; 2]], gate: f64, min: usize) -> Vec<u32> {
 
 /// The plane through `camera`'s centre and the total-least-squares line of the normalised
 /// points in `set`: (unit normal, a point on it), world frame.
-fn pen_plane(
+pub(super) fn pen_plane(
     rig: &StereoRig,
     camera: CameraId,
     points: &[[f64; 2]],
@@ -505,7 +544,7 @@ fn frame<'a>(pair: &PairView<'a>, camera: CameraId) -> Option<&'a KeptFrame> {
 
 /// The clear camera: at least three LEDs with separate spots (`blob`), each apart from every
 /// other LED's image, and no other blob on the pen's image.
-fn clear_image_explained(
+pub(super) fn clear_image_explained(
     pair: &PairView<'_>,
     options: &LineOptions,
     camera: CameraId,
@@ -545,7 +584,7 @@ fn clear_image_explained(
 /// least one neighbour, centred on their segment), with at least one such merge and no other
 /// blob on the pen's image; one end LED may be hidden (by the hand) if the clear camera sees it
 /// (`clear_blob`). None when the image is not explained so.
-fn crowded_image_explained(
+pub(super) fn crowded_image_explained(
     pair: &PairView<'_>,
     options: &LineOptions,
     camera: CameraId,

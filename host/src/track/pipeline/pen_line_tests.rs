@@ -98,6 +98,15 @@ fn label_with(
     s: &Scene,
     direction: Option<&Vector3<f64>>,
 ) -> Option<super::pen_line::LineLabelling> {
+    label_by(s, &options(&s.pen), direction)
+}
+
+/// The pen-line labelling of the scene under `options`.
+fn label_by(
+    s: &Scene,
+    options: &LineOptions,
+    direction: Option<&Vector3<f64>>,
+) -> Option<super::pen_line::LineLabelling> {
     let pair = PairView {
         rig: &s.rig,
         align: &s.align,
@@ -106,7 +115,7 @@ fn label_with(
         tip: &s.tip,
         t: T,
     };
-    label_pen_line(&pair, &options(&s.pen), direction)
+    label_pen_line(&pair, options, direction)
 }
 
 /// The pen's direction towards its tip.
@@ -432,4 +441,58 @@ fn the_pen_line_fit_reports_the_scatter_of_its_points() {
         let ratio = scatter[k] / reported[k];
         assert!((0.75..1.25).contains(&ratio), "LED {}: {ratio}", k + 1);
     }
+}
+
+/// The pen pointing 8 degrees off the right camera and lying within 1 degree of an epipolar
+/// plane (webcam seed 3, the boundary stroke): its spots are one streak on the right, and the
+/// streak's plane meets the left camera's rays at a grazing angle, so no plane labels it. The
+/// left camera's four spots alone fix the pen at the pen's spacing (`pipeline/pen_mono.rs`), and
+/// the fit puts the LEDs where they are (with [`LineOptions::mono_start`], which the tracker
+/// leaves off); the mirrored pen, against the fused direction, is refused.
+#[test]
+fn a_pen_in_an_epipolar_plane_is_located_by_the_clear_camera_alone() {
+    let (rig, pen, _, _, _) = merged_spot_scene(T, 1);
+    let led1 = Vector3::new(0.125, 0.0, 0.9);
+    let to_camera = (Vector3::new(0.25, 0.0, 0.0) - led1).normalize();
+    let turn = nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), 8f64.to_radians());
+    let back = (turn * to_camera + Vector3::y() * 1f64.to_radians().tan()).normalize();
+    let leds = pen.led_offsets.map(|l| led1 + back * l);
+    let px = right_pixels(&rig, &leds);
+    let (a, b) = (px[0], px[LED_COUNT - 1]);
+    let len2 = (b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2);
+    // The streak's centroid: the mean of the four spots, on the pen's image line.
+    let n = LED_COUNT as f64;
+    let centre = px
+        .iter()
+        .fold([0.0, 0.0], |c, p| [c[0] + p[0] / n, c[1] + p[1] / n]);
+    let right = CameraFrame {
+        radii: vec![(len2.sqrt() * 0.5).max(3.0)],
+        shapes: vec![streak_shape(a, b, len2 / 12.0)],
+        ..CameraFrame::new(CameraId::Right, T, vec![centre])
+    };
+    let left_px: Vec<[f64; 2]> = leds
+        .iter()
+        .map(|p| rig.project(CameraId::Left, p).unwrap())
+        .collect();
+    let left = CameraFrame {
+        radii: vec![3.0; LED_COUNT],
+        ..CameraFrame::new(CameraId::Left, T, left_px)
+    };
+    let s = scene_of(rig, pen, leds, left, right);
+    assert!(label(&s, &towards_tip(&s)).is_none(), "no plane labels it");
+    let mono = LineOptions {
+        mono_start: true,
+        ..options(&s.pen)
+    };
+    let l = label_by(&s, &mono, Some(&towards_tip(&s)))
+        .expect("a labelling by the left camera's spots");
+    assert_eq!(l.crowded, CameraId::Right);
+    for k in 0..LED_COUNT {
+        let led = l.leds[k].expect("every LED labelled");
+        assert_eq!((led.clear_blob, led.crowded_blob), (k, 0), "LED {}", k + 1);
+        let err = (led.point - s.leds[k]).norm();
+        assert!(err < 1e-6, "LED {} off by {err} m", k + 1);
+        assert!(led.covariance.is_some_and(|c| c.trace() > 0.0));
+    }
+    assert!(label_by(&s, &mono, Some(&-towards_tip(&s))).is_none());
 }
