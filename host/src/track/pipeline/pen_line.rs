@@ -225,10 +225,8 @@ pub(super) fn label_pen_line(
                 all.extend(ray_labellings(pair, options, crowded, n, *set_k, direction).ok()?);
             }
             for l in all {
-                match &found {
-                    None => found = Some(l),
-                    Some(f) if same_labels(f, &l) => {}
-                    Some(_) => return None,
+                if !keep_unique(&mut found, l) {
+                    return None;
                 }
             }
         }
@@ -259,10 +257,8 @@ fn unique_mono(
         let gate_k = options.gate_px / pair.rig.camera(clear).focal_px();
         for set_k in collinear_sets(norm_k, gate_k, 3) {
             for l in mono_labellings(pair, options, crowded, set_k, direction) {
-                match &found {
-                    None => found = Some(l),
-                    Some(f) if same_labels(f, &l) => {}
-                    Some(_) => return None,
+                if !keep_unique(&mut found, l) {
+                    return None;
                 }
             }
         }
@@ -490,27 +486,14 @@ pub(super) fn labellings(
             for (a, &k) in along.iter().zip(&order) {
                 clear_blob[k] = Some(a.1);
             }
-            if !clear_image_explained(pair, options, clear, &model, &clear_blob) {
-                continue;
+            let mut points = model;
+            for (a, &k) in along.iter().zip(&order) {
+                points[k] = a.2;
             }
-            let Some(crowded_blob) =
-                crowded_image_explained(pair, options, crowded, &model, &clear_blob)
+            let Some(leds) = explained_leds(pair, options, crowded, &model, &clear_blob, &points)
             else {
                 continue;
             };
-            // An LED hidden in the crowded camera has no stereo pair: it is left out.
-            let mut leds = [None; LED_COUNT];
-            for (a, &k) in along.iter().zip(&order) {
-                leds[k] = crowded_blob[k].map(|n| LineLed {
-                    clear_blob: a.1,
-                    crowded_blob: n,
-                    point: a.2,
-                    covariance: None,
-                });
-            }
-            if leds.iter().flatten().count() < 3 {
-                continue;
-            }
             let mismatch = (residuals.iter().map(|r| r * r).sum::<f64>() / count as f64).sqrt();
             out.push(LineLabelling {
                 crowded,
@@ -521,6 +504,44 @@ pub(super) fn labellings(
         }
     }
     out
+}
+
+/// The labelled LEDs of the pen `model` whose clear-camera blobs are `clear_blob`, at `points`,
+/// when both images are explained by it (`clear_image_explained`, `crowded_image_explained`) and
+/// at least three LEDs have a blob in each camera; an LED hidden in the crowded camera has no
+/// stereo pair and is left out.
+pub(super) fn explained_leds(
+    pair: &PairView<'_>,
+    options: &LineOptions,
+    crowded: CameraId,
+    model: &[Vector3<f64>; LED_COUNT],
+    clear_blob: &[Option<usize>; LED_COUNT],
+    points: &[Vector3<f64>; LED_COUNT],
+) -> Option<[Option<LineLed>; LED_COUNT]> {
+    if !clear_image_explained(pair, options, other(crowded), model, clear_blob) {
+        return None;
+    }
+    let crowded_blob = crowded_image_explained(pair, options, crowded, model, clear_blob)?;
+    let leds: [Option<LineLed>; LED_COUNT] = std::array::from_fn(|k| {
+        clear_blob[k].zip(crowded_blob[k]).map(|(c, n)| LineLed {
+            clear_blob: c,
+            crowded_blob: n,
+            point: points[k],
+            covariance: None,
+        })
+    });
+    (leds.iter().flatten().count() >= 3).then_some(leds)
+}
+
+/// Keeps `l` as the one labelling found so far: false when `found` holds another (the pair is
+/// ambiguous).
+fn keep_unique(found: &mut Option<LineLabelling>, l: LineLabelling) -> bool {
+    match found {
+        None => *found = Some(l),
+        Some(f) if same_labels(f, &l) => {}
+        Some(_) => return false,
+    }
+    true
 }
 
 /// The pen's images (distorted pixels) of `camera` and the blobs' radii there.
@@ -544,7 +565,7 @@ fn frame<'a>(pair: &PairView<'a>, camera: CameraId) -> Option<&'a KeptFrame> {
 
 /// The clear camera: at least three LEDs with separate spots (`blob`), each apart from every
 /// other LED's image, and no other blob on the pen's image.
-pub(super) fn clear_image_explained(
+fn clear_image_explained(
     pair: &PairView<'_>,
     options: &LineOptions,
     camera: CameraId,
@@ -584,7 +605,7 @@ pub(super) fn clear_image_explained(
 /// least one neighbour, centred on their segment), with at least one such merge and no other
 /// blob on the pen's image; one end LED may be hidden (by the hand) if the clear camera sees it
 /// (`clear_blob`). None when the image is not explained so.
-pub(super) fn crowded_image_explained(
+fn crowded_image_explained(
     pair: &PairView<'_>,
     options: &LineOptions,
     camera: CameraId,

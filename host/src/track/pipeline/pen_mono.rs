@@ -39,10 +39,7 @@
 //! time alignment becomes millimetres. What is left: the merged blob's motion between frames (or a
 //! fit whose covariance says how little it knows), and the stroke's use of that covariance.
 
-use super::pen_line::{
-    clear_image_explained, crowded_image_explained, normals, other, pen_plane, ray, LineLabelling,
-    LineLed, LineOptions,
-};
+use super::pen_line::{explained_leds, normals, other, pen_plane, ray, LineLabelling, LineOptions};
 use super::safety::PairView;
 use crate::stereo::CameraId;
 use crate::track::pen::LED_COUNT;
@@ -152,26 +149,10 @@ pub(super) fn mono_labellings(
             }) {
                 continue;
             }
-            if !clear_image_explained(pair, options, clear, &model, &clear_blob) {
-                continue;
-            }
-            let Some(crowded_blob) =
-                crowded_image_explained(pair, options, crowded, &model, &clear_blob)
+            let Some(leds) = explained_leds(pair, options, crowded, &model, &clear_blob, &model)
             else {
                 continue;
             };
-            let mut leds = [None; LED_COUNT];
-            for k in 0..LED_COUNT {
-                leds[k] = clear_blob[k].zip(crowded_blob[k]).map(|(c, n)| LineLed {
-                    clear_blob: c,
-                    crowded_blob: n,
-                    point: model[k],
-                    covariance: None,
-                });
-            }
-            if leds.iter().flatten().count() < 3 {
-                continue;
-            }
             out.push(LineLabelling {
                 crowded,
                 leds,
