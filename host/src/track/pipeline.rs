@@ -34,6 +34,7 @@ mod labelling;
 mod line_order;
 mod merged;
 mod pen_fit;
+mod pen_image;
 mod pen_line;
 #[cfg(test)]
 mod pen_line_tests;
@@ -491,7 +492,7 @@ impl Tracker {
             raw_tip: Some(estimate.tip.into()),
             direction: Some(estimate.direction.into()),
             leds: id.points.map(|p| p.map(Into::into)),
-            labels: pen_line::own_images(id, cands),
+            labels: pen_image::own_images(id, cands),
             quality: TrackQuality::Vision {
                 leds: id.count() as u8,
             },

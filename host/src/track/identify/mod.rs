@@ -60,7 +60,8 @@ pub struct Identification {
     pub interference: usize,
     /// LEDs without a stereo candidate that were still found where the labelled pen puts them:
     /// a blob of their own in one camera, and in the other inside one blob with a neighbour's
-    /// spot (bit i = LED i+1; see the tracker's merged-spot completion).
+    /// spot (the tracker's merged-spot completion) or, for a pen-line labelling, no blob at all
+    /// (hidden by the hand or too dim there; its spot was fitted) (bit i = LED i+1).
     pub completed: u8,
     /// The LEDs were located along the pen's image line of a camera in which their spots merged
     /// (the tracker's pen-line stereo): that camera's blob of an LED may be a merge covering it, so

@@ -103,13 +103,17 @@ pub(super) fn fit_pen_line(
             scale: focal(clear) / sigma(clear, led.clear_blob),
             at: Offset::Led(offsets[k]),
         });
+        // An LED hidden in the crowded camera has its clear spot only.
+        let Some(blob) = led.crowded_blob else {
+            continue;
+        };
         let covering: Vec<usize> = seen
             .iter()
-            .filter(|&&(j, _)| l.leds[j].is_some_and(|o| o.crowded_blob == led.crowded_blob))
+            .filter(|&&(j, _)| l.leds[j].is_some_and(|o| o.crowded_blob == Some(blob)))
             .map(|&(j, _)| j)
             .collect();
-        let target = *normals(pair, crowded).get(led.crowded_blob)?;
-        let scale = focal(crowded) / sigma(crowded, led.crowded_blob);
+        let target = *normals(pair, crowded).get(blob)?;
+        let scale = focal(crowded) / sigma(crowded, blob);
         if covering[0] != k {
             continue;
         }

@@ -19,14 +19,22 @@
 //! * in the crowded camera every LED is imaged, by a spot of its own or inside a blob that covers
 //!   at least two neighbours and is centred on their segment (at least one such merge), and every
 //!   blob on the pen's image is one of these; only an end LED that the clear camera sees may be
-//!   hidden there (by the hand), and is left out (it has no stereo pair);
+//!   hidden there (by the hand), and has no stereo pair;
+//! * or, in a second pass run only when the first finds nothing, the crowded camera images just
+//!   two LEDs, each by a spot of its own, and misses the others, a run at one end of the pen
+//!   (webcam seeds 6, 8 and 9 at a stroke's start: the LEDs' emission cones turned away, one
+//!   camera sees LEDs 1-3 and the other LEDs 1-2); the clear camera's third spot tells which LEDs
+//!   they are, and the labelling is one of two stereo LEDs and a third located by its clear spot
+//!   on the fitted pen ([`Identification::completed`]). About a compact blob's ray there is no
+//!   such pass (two spots give the plane);
 //! * the pen points the way the fused direction does, while the tracker has that prior (after a
 //!   loss longer than the prior's timeout, the geometry alone decides, as in identification: an
 //!   uncorrected inertial direction may have drifted beyond any bound);
 //! * no other labelling (other camera crowded, other LEDs, the mirrored pen, other blobs) passes.
 //!
 //! The LEDs' points are the clear camera's rays met with the crowded camera's pen plane, then
-//! moved to the pen's line fitted to every spot and merged blob of both images, which also gives
+//! moved to the pen's line fitted to every spot and merged blob of both images (an LED hidden in
+//! the crowded camera by its clear spot alone), which also gives
 //! their covariance (`pipeline/pen_fit.rs`; a labelling the fit cannot explain is dropped). When
 //! the crowded camera's pen is one compact blob (pointing straight at it), the plane is found
 //! about that blob's ray (`pipeline/pen_ray.rs`). The tracker adds the points as stereo
@@ -34,12 +42,11 @@
 //! labelling [`Identification::from_pen_line`], which its merge checks and the clock-offset
 //! estimate leave out (a covering blob is not its LEDs' image).
 
-use super::align::KeptFrame;
-use super::merged::segment_distance;
 use super::pen_fit::fit_pen_line;
+use super::pen_image::{explained_leds, frame};
 use super::pen_mono::mono_labellings;
 use super::pen_ray::ray_labellings;
-use super::safety::{PairView, MERGE_MARGIN};
+use super::safety::PairView;
 use super::{Tracker, TrackerConfig};
 use crate::stereo::correspond::covariance;
 use crate::stereo::{CameraId, Candidate, StereoRig};
@@ -70,6 +77,10 @@ pub(super) struct LineOptions {
     /// 0.862 -> 0.984) but its fitted points can lie mm off (seed 3's worst RMS 0.68 -> 1.04 mm,
     /// seed 4's 0.91 -> 1.11 mm); see the measurements in `pipeline/pen_mono.rs`.
     pub(super) mono_start: bool,
+    /// Some(n): the crowded camera images exactly `n` LEDs, each by a spot of its own, and misses
+    /// the others, a run at one end of the pen (`crowded_image_explained`): [`label_pen_line`]'s
+    /// later passes.
+    pub(super) own_spots: Option<usize>,
 }
 
 impl LineOptions {
@@ -83,6 +94,7 @@ impl LineOptions {
             prior_min_cos: config.identify.prior_min_cos,
             pixel_sigma: config.correspondence.pixel_sigma,
             mono_start: false,
+            own_spots: None,
         }
     }
 }
@@ -106,8 +118,9 @@ pub(super) struct LineLabelling {
 pub(super) struct LineLed {
     /// Its blob in the clear camera.
     pub(super) clear_blob: usize,
-    /// Its own blob, or the blob covering it, in the crowded camera.
-    pub(super) crowded_blob: usize,
+    /// Its own blob, or the blob covering it, in the crowded camera; None where it is hidden there
+    /// (by the hand, or too dim: the end of the pen that the crowded camera sees least).
+    pub(super) crowded_blob: Option<usize>,
     /// The clear camera's ray met with the crowded camera's pen plane, world frame, metres.
     pub(super) point: Vector3<f64>,
     /// The point's covariance once the pen's line was fitted to the images
@@ -135,11 +148,17 @@ impl Tracker {
         ];
         let mut assignment = [None; LED_COUNT];
         let mut points = [None; LED_COUNT];
+        let mut completed = 0u8;
         for (k, led) in found.leds.iter().enumerate() {
             let Some(led) = led else { continue };
+            // An LED only the clear camera sees has no stereo pair; its spot was fitted.
+            let Some(crowded_blob) = led.crowded_blob else {
+                completed |= 1 << k;
+                continue;
+            };
             let (left, right) = match found.crowded {
-                CameraId::Left => (led.crowded_blob, led.clear_blob),
-                CameraId::Right => (led.clear_blob, led.crowded_blob),
+                CameraId::Left => (crowded_blob, led.clear_blob),
+                CameraId::Right => (led.clear_blob, crowded_blob),
             };
             // The crowded camera's image point is where the LED projects on its pen line.
             let to_normal = |camera: CameraId| {
@@ -165,7 +184,7 @@ impl Tracker {
         let fit = (-(found.mismatch / options.tolerance).powi(2)).exp();
         // A pen imaged as one blob labels it for every LED (a merge, as a plane's labelling
         // does); about a ray among several blobs the LEDs may sit one blob off.
-        let mut crowded_blobs = found.leds.iter().flatten().map(|l| l.crowded_blob);
+        let mut crowded_blobs = found.leds.iter().flatten().filter_map(|l| l.crowded_blob);
         let first_blob = crowded_blobs.next();
         let one_blob = crowded_blobs.all(|b| Some(b) == first_blob);
         Some(Identification {
@@ -175,7 +194,7 @@ impl Tracker {
             confidence: fit * (count as f64 / LED_COUNT as f64).sqrt(),
             resolution: Resolution::Geometry,
             interference: 0,
-            completed: 0,
+            completed,
             from_pen_line: true,
             from_pen_ray: (found.from_ray && !one_blob).then_some(found.crowded),
         })
@@ -193,6 +212,33 @@ pub(super) fn label_pen_line(
     options: &LineOptions,
     direction: Option<&Vector3<f64>>,
 ) -> Option<LineLabelling> {
+    // The images as they are first, then with LEDs missing at one end of the crowded camera's
+    // pen: a labelling that sees more of the pen is the likelier one, and where it exists the
+    // second pass adds nothing (nor a rival).
+    let mut found = unique_plane(pair, options, direction)?;
+    if found.is_none() {
+        let two = LineOptions {
+            own_spots: Some(2),
+            ..*options
+        };
+        found = unique_plane(pair, &two, direction)?;
+    }
+    // No plane labels the pen: the clear camera's spots alone may (`pipeline/pen_mono.rs`).
+    if found.is_none() && options.mono_start {
+        found = unique_mono(pair, options, direction)?;
+    }
+    // Only the unique labelling is fitted: a rival that the fit would reject still makes the
+    // pair ambiguous.
+    fit_pen_line(pair, options, found?)
+}
+
+/// The one labelling of the pair along a pen plane of either camera's (see the module doc):
+/// Some(None) when there is none, None when there are several.
+fn unique_plane(
+    pair: &PairView<'_>,
+    options: &LineOptions,
+    direction: Option<&Vector3<f64>>,
+) -> Option<Option<LineLabelling>> {
     let mut found: Option<LineLabelling> = None;
     for crowded in [CameraId::Left, CameraId::Right] {
         let clear = other(crowded);
@@ -221,7 +267,11 @@ pub(super) fn label_pen_line(
                     pair, options, crowded, plane_c, set_k, direction,
                 ));
             }
-            for n in (0..norm_c.len()).filter(|&n| streaks[n].is_none()) {
+            // About a compact blob's ray (the pen pointing at the crowded camera), not where its
+            // two spots give the plane.
+            for n in
+                (0..norm_c.len()).filter(|&n| streaks[n].is_none() && options.own_spots.is_none())
+            {
                 all.extend(ray_labellings(pair, options, crowded, n, *set_k, direction).ok()?);
             }
             for l in all {
@@ -231,13 +281,7 @@ pub(super) fn label_pen_line(
             }
         }
     }
-    // No plane labels the pen: the clear camera's spots alone may (`pipeline/pen_mono.rs`).
-    if found.is_none() && options.mono_start {
-        found = unique_mono(pair, options, direction)?;
-    }
-    // Only the unique labelling is fitted: a rival that the fit would reject still makes the
-    // pair ambiguous.
-    fit_pen_line(pair, options, found?)
+    Some(found)
 }
 
 /// The one labelling that the clear camera's pose alone gives (`pipeline/pen_mono.rs`): Some(None)
@@ -506,33 +550,6 @@ pub(super) fn labellings(
     out
 }
 
-/// The labelled LEDs of the pen `model` whose clear-camera blobs are `clear_blob`, at `points`,
-/// when both images are explained by it (`clear_image_explained`, `crowded_image_explained`) and
-/// at least three LEDs have a blob in each camera; an LED hidden in the crowded camera has no
-/// stereo pair and is left out.
-pub(super) fn explained_leds(
-    pair: &PairView<'_>,
-    options: &LineOptions,
-    crowded: CameraId,
-    model: &[Vector3<f64>; LED_COUNT],
-    clear_blob: &[Option<usize>; LED_COUNT],
-    points: &[Vector3<f64>; LED_COUNT],
-) -> Option<[Option<LineLed>; LED_COUNT]> {
-    if !clear_image_explained(pair, options, other(crowded), model, clear_blob) {
-        return None;
-    }
-    let crowded_blob = crowded_image_explained(pair, options, crowded, model, clear_blob)?;
-    let leds: [Option<LineLed>; LED_COUNT] = std::array::from_fn(|k| {
-        clear_blob[k].zip(crowded_blob[k]).map(|(c, n)| LineLed {
-            clear_blob: c,
-            crowded_blob: n,
-            point: points[k],
-            covariance: None,
-        })
-    });
-    (leds.iter().flatten().count() >= 3).then_some(leds)
-}
-
 /// Keeps `l` as the one labelling found so far: false when `found` holds another (the pair is
 /// ambiguous).
 fn keep_unique(found: &mut Option<LineLabelling>, l: LineLabelling) -> bool {
@@ -542,154 +559,4 @@ fn keep_unique(found: &mut Option<LineLabelling>, l: LineLabelling) -> bool {
         Some(_) => return false,
     }
     true
-}
-
-/// The pen's images (distorted pixels) of `camera` and the blobs' radii there.
-fn images<'a>(
-    pair: &PairView<'a>,
-    camera: CameraId,
-    model: &[Vector3<f64>; LED_COUNT],
-) -> Option<([[f64; 2]; LED_COUNT], &'a [f64])> {
-    let mut px = [[0.0; 2]; LED_COUNT];
-    for (k, p) in model.iter().enumerate() {
-        px[k] = pair.rig.project(camera, p).ok()?;
-    }
-    let radii = frame(pair, camera).map_or(&[][..], |f| &f.radii[..]);
-    Some((px, radii))
-}
-
-/// The newest frame of `camera` (its blobs' radii and second moments).
-fn frame<'a>(pair: &PairView<'a>, camera: CameraId) -> Option<&'a KeptFrame> {
-    pair.align.current(usize::from(camera == CameraId::Right))
-}
-
-/// The clear camera: at least three LEDs with separate spots (`blob`), each apart from every
-/// other LED's image, and no other blob on the pen's image.
-fn clear_image_explained(
-    pair: &PairView<'_>,
-    options: &LineOptions,
-    camera: CameraId,
-    model: &[Vector3<f64>; LED_COUNT],
-    blob: &[Option<usize>; LED_COUNT],
-) -> bool {
-    let Some((px, radii)) = images(pair, camera, model) else {
-        return false;
-    };
-    let blobs = pair.points.pixels(camera);
-    let radius = |k: usize| blob[k].and_then(|n| radii.get(n).copied());
-    let largest = (0..LED_COUNT).filter_map(radius).fold(0.0, f64::max);
-    for k in (0..LED_COUNT).filter(|&k| blob[k].is_some()) {
-        let Some(&b) = blob[k].and_then(|n| blobs.get(n)) else {
-            return false;
-        };
-        if dist(b, px[k]) > options.gate_px {
-            return false;
-        }
-        let r_k = radius(k).unwrap_or(largest);
-        let apart = (0..LED_COUNT).filter(|&j| j != k).all(|j| {
-            let min = options
-                .gate_px
-                .max(MERGE_MARGIN * (r_k + radius(j).unwrap_or(largest)));
-            dist(px[j], px[k]) >= min
-        });
-        if !apart {
-            return false;
-        }
-    }
-    let used = |n: usize| blob.contains(&Some(n));
-    let on_pen = |q: [f64; 2]| segment_distance(q, px[0], px[LED_COUNT - 1]) <= options.gate_px;
-    blob.iter().flatten().count() >= 3 && (0..blobs.len()).all(|n| used(n) || !on_pen(blobs[n]))
-}
-
-/// The crowded camera: the blob that images each LED (its own spot, or a blob covering it and at
-/// least one neighbour, centred on their segment), with at least one such merge and no other
-/// blob on the pen's image; one end LED may be hidden (by the hand) if the clear camera sees it
-/// (`clear_blob`). None when the image is not explained so.
-fn crowded_image_explained(
-    pair: &PairView<'_>,
-    options: &LineOptions,
-    camera: CameraId,
-    model: &[Vector3<f64>; LED_COUNT],
-    clear_blob: &[Option<usize>; LED_COUNT],
-) -> Option<[Option<usize>; LED_COUNT]> {
-    let (px, radii) = images(pair, camera, model)?;
-    let blobs = pair.points.pixels(camera);
-    let shapes = frame(pair, camera).map_or(&[][..], |f| &f.shapes[..]);
-    // Each LED's blob: the nearest of those whose extent covers it (a small spot next to a long
-    // merge may be nearer by centroid while the merge covers the LED).
-    let covers = |n: usize, p: [f64; 2]| match shapes.get(n) {
-        Some(shape) => within_extent(shape, blobs[n], p, options.gate_px),
-        None => dist(blobs[n], p) <= options.gate_px.max(radii.get(n).copied().unwrap_or(0.0)),
-    };
-    let mut blob = [None; LED_COUNT];
-    for k in 0..LED_COUNT {
-        blob[k] = (0..blobs.len())
-            .filter(|&n| covers(n, px[k]))
-            .min_by(|&x, &y| dist(blobs[x], px[k]).total_cmp(&dist(blobs[y], px[k])));
-    }
-    let hidden: Vec<usize> = (0..LED_COUNT).filter(|&k| blob[k].is_none()).collect();
-    let end = |k: usize| k == 0 || k == LED_COUNT - 1;
-    if hidden.len() > 1 || hidden.iter().any(|&k| !end(k) || clear_blob[k].is_none()) {
-        return None;
-    }
-    let mut merges = 0;
-    for k in (0..LED_COUNT).filter(|&k| blob[k].is_some()) {
-        let members: Vec<usize> = (0..LED_COUNT).filter(|&j| blob[j] == blob[k]).collect();
-        let (first, last) = (members[0], members[members.len() - 1]);
-        if first != k {
-            continue;
-        }
-        let centre = blobs[blob[k]?];
-        if members.len() == 1 {
-            if dist(centre, px[k]) > options.gate_px {
-                return None;
-            }
-        } else {
-            // A merge covers neighbours only, and its centroid lies between them.
-            if last - first + 1 != members.len()
-                || segment_distance(centre, px[first], px[last]) > options.gate_px
-            {
-                return None;
-            }
-            merges += 1;
-        }
-    }
-    let on_pen = |q: [f64; 2]| segment_distance(q, px[0], px[LED_COUNT - 1]) <= options.gate_px;
-    let explained = (0..blobs.len()).all(|n| blob.contains(&Some(n)) || !on_pen(blobs[n]));
-    (merges > 0 && explained).then_some(blob)
-}
-
-/// True when `p` lies within the extent of a blob centred at `centre` with second moments
-/// `shape`, widened by `gate_px`: `d^T (4 C + g^2 I)^-1 d <= 1` (a uniform disc of radius r has
-/// `C = r^2 / 4`, so its extent is the disc grown by the gate).
-fn within_extent(shape: &[f64; 3], centre: [f64; 2], p: [f64; 2], gate_px: f64) -> bool {
-    let g2 = gate_px * gate_px;
-    let (a, b, c) = (4.0 * shape[0] + g2, 4.0 * shape[1], 4.0 * shape[2] + g2);
-    let det = a * c - b * b;
-    let (dx, dy) = (p[0] - centre[0], p[1] - centre[1]);
-    det > 0.0 && (c * dx * dx - 2.0 * b * dx * dy + a * dy * dy) / det <= 1.0
-}
-
-fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
-}
-
-/// Each labelled LED's own blob in the left and right image: an LED that a pen-line labelling
-/// located inside a blob it shares with a neighbour (a merge) has no image of its own there.
-pub(super) fn own_images(
-    id: &Identification,
-    cands: &[Candidate],
-) -> [Option<(usize, usize)>; LED_COUNT] {
-    let pairs = id
-        .assignment
-        .map(|a| a.map(|k| (cands[k].left, cands[k].right)));
-    let shared = |k: usize, side: fn(&(usize, usize)) -> usize| {
-        pairs[k].is_some_and(|p| {
-            (0..LED_COUNT).any(|j| j != k && pairs[j].is_some_and(|q| side(&q) == side(&p)))
-        })
-    };
-    std::array::from_fn(|k| {
-        let merged = id.from_pen_line && (shared(k, |p| p.0) || shared(k, |p| p.1));
-        pairs[k].filter(|_| !merged && id.from_pen_ray.is_none())
-    })
 }

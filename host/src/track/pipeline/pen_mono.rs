@@ -39,7 +39,8 @@
 //! time alignment becomes millimetres. What is left: the merged blob's motion between frames (or a
 //! fit whose covariance says how little it knows), and the stroke's use of that covariance.
 
-use super::pen_line::{explained_leds, normals, other, pen_plane, ray, LineLabelling, LineOptions};
+use super::pen_image::explained_leds;
+use super::pen_line::{normals, other, pen_plane, ray, LineLabelling, LineOptions};
 use super::safety::PairView;
 use crate::stereo::CameraId;
 use crate::track::pen::LED_COUNT;

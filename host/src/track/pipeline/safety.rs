@@ -106,8 +106,12 @@ impl LabelGuard {
         vision: &TipEstimate,
         stale_prior: bool,
     ) -> Option<Unsafe> {
+        // A pen-line labelling of two stereo LEDs located a third by its clear spot
+        // (`pipeline/pen_line.rs`): three LEDs at the pen's spacing identify it.
+        let pen_line_three = id.from_pen_line && id.located() >= 3;
         if id.count() < 3
             && id.located() < LED_COUNT
+            && !pen_line_three
             && (stale_prior || !self.labels_match_prediction(pair, id))
         {
             return Some(Unsafe::TwoLedsUnconfirmed);
