@@ -22,8 +22,9 @@ use super::DirectionFilter;
 use nalgebra::{UnitQuaternion, Vector3};
 use std::collections::VecDeque;
 
-/// Gains of the complementary filter.
+/// Gains of the complementary filter (a configuration that leaves a gain out gets its default).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct OrientationConfig {
     /// Gravity correction gain, 1/s.
     pub k_accel: f64,
