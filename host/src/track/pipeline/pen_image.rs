@@ -38,16 +38,14 @@ pub(super) fn explained_leds(
             covariance: None,
         })
     });
-    let stereo: Vec<usize> = leds
+    // With `own_spots` the crowded camera's LEDs have spots of their own (no merge), and all of
+    // them must be stereo LEDs.
+    let stereo = leds
         .iter()
         .flatten()
-        .filter_map(|l| l.crowded_blob)
-        .collect();
-    let distinct = stereo
-        .iter()
-        .all(|b| stereo.iter().filter(|c| *c == b).count() == 1);
-    let own_spots = options.own_spots == Some(stereo.len()) && distinct;
-    (stereo.len() >= 3 || own_spots).then_some(leds)
+        .filter(|l| l.crowded_blob.is_some())
+        .count();
+    (stereo >= 3 || options.own_spots == Some(stereo)).then_some(leds)
 }
 
 /// The pen's images (distorted pixels) of `camera` and the blobs' radii there.

@@ -269,10 +269,10 @@ fn unique_plane(
             }
             // About a compact blob's ray (the pen pointing at the crowded camera), not where its
             // two spots give the plane.
-            for n in
-                (0..norm_c.len()).filter(|&n| streaks[n].is_none() && options.own_spots.is_none())
-            {
-                all.extend(ray_labellings(pair, options, crowded, n, *set_k, direction).ok()?);
+            if options.own_spots.is_none() {
+                for n in (0..norm_c.len()).filter(|&n| streaks[n].is_none()) {
+                    all.extend(ray_labellings(pair, options, crowded, n, *set_k, direction).ok()?);
+                }
             }
             for l in all {
                 if !keep_unique(&mut found, l) {
