@@ -13,11 +13,11 @@ use crate::track::pen::LED_COUNT;
 use nalgebra::Vector3;
 
 /// The labelled LEDs of the pen `model` whose clear-camera blobs are `clear_blob`, at `points`,
-/// when both images are explained by it (`clear_image_explained`, `crowded_image_explained`) and
-/// the crowded camera measures the pen at two points or more: at least three LEDs with a blob in
-/// each camera, or two LEDs with a spot of their own there (fewer than the three that point
-/// stereo needs; the clear camera's third spot fixes which LEDs they are). An LED hidden in the
-/// crowded camera keeps its clear spot, for the fit, and has no stereo pair.
+/// when both images are explained by it (`clear_image_explained`, `crowded_image_explained`):
+/// at least three LEDs with a blob in each camera, or as many LEDs with a spot of their own there
+/// as [`LineOptions::own_spots`] asks (two, or one end LED; fewer than the three that point
+/// stereo needs; the clear camera's spots fix which LEDs they are). An LED hidden in the crowded
+/// camera keeps its clear spot, for the fit, and has no stereo pair.
 pub(super) fn explained_leds(
     pair: &PairView<'_>,
     options: &LineOptions,

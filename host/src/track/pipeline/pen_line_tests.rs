@@ -548,3 +548,84 @@ fn two_spots_in_the_crowded_camera_and_three_in_the_clear_one_label_the_pen() {
     let inner = with_right([0, 2]);
     assert!(label(&inner, &towards_tip(&inner)).is_none());
 }
+
+/// The back end of the pen too dim for the right camera but for LED 1, while the left camera
+/// sees LEDs 1-3 (webcam seeds 12 and 15 at a stroke's turn or start: one camera sees LEDs 1-3,
+/// the other LED 1 alone): point stereo has one candidate. Of the planes about the right spot's
+/// ray, the pen's meets the left camera's three rays at the pen's spacing; LED 1 is labelled at
+/// its position and LEDs 2 and 3 keep their left spots (no stereo pair), all on the fitted pen.
+/// The mirrored pen, a pen 20 degrees off the fused direction, no fused direction, another blob
+/// in the right camera, or the right spot being an inner LED's, gives no labelling.
+#[test]
+fn one_spot_in_the_crowded_camera_and_three_in_the_clear_one_label_the_pen() {
+    // The pen upright and leaning back, well off both cameras' lines of sight.
+    let with_right = |shown: usize| {
+        let (rig, pen, _, _, _) = merged_spot_scene(T, 1);
+        let back = Vector3::new(0.2, -1.0, 0.3).normalize();
+        let leds = pen
+            .led_offsets
+            .map(|l| Vector3::new(0.125, 0.0, 0.9) + back * l);
+        let px = |camera, p: &Vector3<f64>| rig.project(camera, p).unwrap();
+        let left = CameraFrame {
+            radii: vec![3.0; 3],
+            ..CameraFrame::new(
+                CameraId::Left,
+                T,
+                leds[..3].iter().map(|p| px(CameraId::Left, p)).collect(),
+            )
+        };
+        let right = CameraFrame {
+            radii: vec![3.0],
+            ..CameraFrame::new(CameraId::Right, T, vec![px(CameraId::Right, &leds[shown])])
+        };
+        scene_of(rig, pen, leds, left, right)
+    };
+    let s = with_right(0);
+    let l = label(&s, &towards_tip(&s)).expect("a pen-line labelling");
+    assert_eq!(l.crowded, CameraId::Right);
+    assert!(!l.from_ray, "the right spot is LED 1's own");
+    assert!(l.leds[3].is_none(), "LED 4 is seen by neither camera");
+    for (k, crowded) in [(0, Some(0)), (1, None), (2, None)] {
+        let led = l.leds[k].expect("LEDs 1-3 labelled");
+        assert_eq!(
+            (led.clear_blob, led.crowded_blob),
+            (k, crowded),
+            "LED {}",
+            k + 1
+        );
+        let err = (led.point - s.leds[k]).norm();
+        assert!(err < 1e-6, "LED {} off by {err} m", k + 1);
+        assert!(led.covariance.is_some_and(|c| c.trace() > 0.0));
+    }
+    assert!(label(&s, &-towards_tip(&s)).is_none());
+    let (a, _) = super::pen_ray::across(&towards_tip(&s));
+    let off = towards_tip(&s) * 20f64.to_radians().cos() + a * 20f64.to_radians().sin();
+    assert!(
+        label(&s, &off).is_none(),
+        "20 degrees off the fused direction"
+    );
+    let near = towards_tip(&s) * 10f64.to_radians().cos() + a * 10f64.to_radians().sin();
+    assert!(
+        label(&s, &near).is_some(),
+        "10 degrees off the fused direction"
+    );
+    assert!(label_with(&s, None).is_none());
+    let (rig, pen, leds) = (s.rig.clone(), s.pen, s.leds);
+    let mut left = CameraFrame::new(CameraId::Left, T, s.points.pixels(CameraId::Left).to_vec());
+    left.radii = vec![3.0; 3];
+    let mut spots = s.points.pixels(CameraId::Right).to_vec();
+    spots.push([spots[0][0] + 60.0, spots[0][1] - 40.0]);
+    let right = CameraFrame {
+        radii: vec![3.0; 2],
+        ..CameraFrame::new(CameraId::Right, T, spots)
+    };
+    let two = scene_of(rig, pen, leds, left, right);
+    assert!(
+        label(&two, &towards_tip(&two)).is_none(),
+        "another blob on the right"
+    );
+    for inner in [1, 2] {
+        let s = with_right(inner);
+        assert!(label(&s, &towards_tip(&s)).is_none(), "LED {}", inner + 1);
+    }
+}
