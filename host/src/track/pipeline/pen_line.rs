@@ -166,7 +166,8 @@ impl Tracker {
             let Some(led) = led else { continue };
             // An LED only the clear camera sees has no stereo pair; its spot was fitted. With one
             // stereo LED, the fitted pen's other LEDs give the axis (the tip, at LED 1, is the
-            // fit's).
+            // fit's); one candidate gives no axis variance (`prior::direction_variance`), so the
+            // orientation filter takes that axis with its configured vision gain.
             let Some(crowded_blob) = led.crowded_blob else {
                 completed |= 1 << k;
                 if stereo == 1 {
