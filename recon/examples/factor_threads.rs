@@ -1,9 +1,9 @@
 //! One thread against two (`SubtreeThreads`) on implicit editing's first-system shape: a
 //! 4-ring operator on a geodesic ball of an icosphere, ordered on the mesh graph as the
 //! editor orders it. Prints one JSON line per configuration with the median numeric
-//! factorisation (into a fresh value array, and again into the same one: the
-//! arithmetic without first touching the memory) and 3-right-hand-side solve times; the runs are interleaved so machine
-//! noise hits both alike.
+//! factorisation (into a fresh value array, and again into the same one: the arithmetic
+//! without first touching the memory) and 3-right-hand-side solve times; the runs are
+//! interleaved so machine noise hits both alike.
 //!
 //! `cargo run --release -p fires-recon --example factor_threads -- 48000 5`
 

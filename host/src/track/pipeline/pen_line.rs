@@ -252,11 +252,7 @@ pub(super) fn label_pen_line(
         };
         found = unique_plane(pair, &two, direction)?;
     }
-    // Then one LED with a spot of its own in the crowded camera, the others too dim there (the
-    // (3, 1) class: webcam seeds 8, 12 and 15 at a stroke's start or turn, one camera sees LEDs
-    // 1-3, the other LED 1 alone): the planes about that spot's ray. One spot checks little of
-    // the pen: this pass needs the fused direction, within a narrower cone, and the crowded
-    // camera showing that spot alone (see `unique_plane`).
+    // Then one end LED's own spot alone in the crowded camera (the module doc's third pass).
     if found.is_none() && direction.is_some() {
         let one = LineOptions {
             own_spots: Some(1),
@@ -304,12 +300,15 @@ fn unique_plane(
         let streaks: Vec<Option<(Vector3<f64>, Vector3<f64>)>> = (0..norm_c.len())
             .map(|n| streak_plane(pair, crowded, n))
             .collect();
-        let planes_c: Vec<(Vector3<f64>, Vector3<f64>)> = collinear_sets(norm_c, gate_c, 2)
-            .into_iter()
-            .filter_map(|set| pen_plane(pair.rig, crowded, norm_c, set))
-            .chain(streaks.iter().flatten().copied())
-            .filter(|_| !single)
-            .collect();
+        let planes_c: Vec<(Vector3<f64>, Vector3<f64>)> = if single {
+            Vec::new()
+        } else {
+            collinear_sets(norm_c, gate_c, 2)
+                .into_iter()
+                .filter_map(|set| pen_plane(pair.rig, crowded, norm_c, set))
+                .chain(streaks.iter().flatten().copied())
+                .collect()
+        };
         let sets_k = collinear_sets(norm_k, gate_k, 3);
         for set_k in &sets_k {
             let mut all = Vec::new();

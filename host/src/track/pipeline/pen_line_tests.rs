@@ -118,6 +118,31 @@ fn label_by(
     label_pen_line(&pair, options, direction)
 }
 
+/// Asserts that labelling `l` puts each LED `k` of `expected` (LED, crowded blob) on clear blob
+/// `k` and that crowded blob, within 1e-6 m of its true position in `s`, with a fitted
+/// covariance when `fitted`.
+fn assert_leds(
+    l: &super::pen_line::LineLabelling,
+    s: &Scene,
+    expected: &[(usize, Option<usize>)],
+    fitted: bool,
+) {
+    for &(k, crowded) in expected {
+        let led = l.leds[k].unwrap_or_else(|| panic!("LED {} labelled", k + 1));
+        assert_eq!(
+            (led.clear_blob, led.crowded_blob),
+            (k, crowded),
+            "LED {}",
+            k + 1
+        );
+        let err = (led.point - s.leds[k]).norm();
+        assert!(err < 1e-6, "LED {} off by {err} m", k + 1);
+        if fitted {
+            assert!(led.covariance.is_some_and(|c| c.trace() > 0.0));
+        }
+    }
+}
+
 /// The pen's direction towards its tip.
 fn towards_tip(s: &Scene) -> Vector3<f64> {
     (s.leds[0] - s.leds[3]).normalize()
@@ -494,18 +519,8 @@ fn a_pen_in_an_epipolar_plane_is_located_by_the_clear_camera_alone() {
     let l = label_by(&s, &mono, Some(&towards_tip(&s)))
         .expect("a labelling by the left camera's spots");
     assert_eq!(l.crowded, CameraId::Right);
-    for k in 0..LED_COUNT {
-        let led = l.leds[k].expect("every LED labelled");
-        assert_eq!(
-            (led.clear_blob, led.crowded_blob),
-            (k, Some(0)),
-            "LED {}",
-            k + 1
-        );
-        let err = (led.point - s.leds[k]).norm();
-        assert!(err < 1e-6, "LED {} off by {err} m", k + 1);
-        assert!(led.covariance.is_some_and(|c| c.trace() > 0.0));
-    }
+    let every: Vec<(usize, Option<usize>)> = (0..LED_COUNT).map(|k| (k, Some(0))).collect();
+    assert_leds(&l, &s, &every, true);
     assert!(label_by(&s, &mono, Some(&-towards_tip(&s))).is_none());
 }
 
@@ -533,17 +548,7 @@ fn two_spots_in_the_crowded_camera_and_three_in_the_clear_one_label_the_pen() {
     let l = label(&s, &towards_tip(&s)).expect("a pen-line labelling");
     assert_eq!(l.crowded, CameraId::Right);
     assert!(l.leds[3].is_none(), "LED 4 is seen by neither camera");
-    for (k, crowded) in [(0, Some(0)), (1, Some(1)), (2, None)] {
-        let led = l.leds[k].expect("LEDs 1-3 labelled");
-        assert_eq!(
-            (led.clear_blob, led.crowded_blob),
-            (k, crowded),
-            "LED {}",
-            k + 1
-        );
-        let err = (led.point - s.leds[k]).norm();
-        assert!(err < 1e-6, "LED {} off by {err} m", k + 1);
-    }
+    assert_leds(&l, &s, &[(0, Some(0)), (1, Some(1)), (2, None)], false);
     assert!(label(&s, &-towards_tip(&s)).is_none());
     let inner = with_right([0, 2]);
     assert!(label(&inner, &towards_tip(&inner)).is_none());
@@ -585,18 +590,7 @@ fn one_spot_in_the_crowded_camera_and_three_in_the_clear_one_label_the_pen() {
     assert_eq!(l.crowded, CameraId::Right);
     assert!(!l.from_ray, "the right spot is LED 1's own");
     assert!(l.leds[3].is_none(), "LED 4 is seen by neither camera");
-    for (k, crowded) in [(0, Some(0)), (1, None), (2, None)] {
-        let led = l.leds[k].expect("LEDs 1-3 labelled");
-        assert_eq!(
-            (led.clear_blob, led.crowded_blob),
-            (k, crowded),
-            "LED {}",
-            k + 1
-        );
-        let err = (led.point - s.leds[k]).norm();
-        assert!(err < 1e-6, "LED {} off by {err} m", k + 1);
-        assert!(led.covariance.is_some_and(|c| c.trace() > 0.0));
-    }
+    assert_leds(&l, &s, &[(0, Some(0)), (1, None), (2, None)], true);
     assert!(label(&s, &-towards_tip(&s)).is_none());
     let (a, _) = super::pen_ray::across(&towards_tip(&s));
     let off = towards_tip(&s) * 20f64.to_radians().cos() + a * 20f64.to_radians().sin();
