@@ -452,7 +452,7 @@ impl Tracker {
         }
         let cands = &self.correspondences.candidates;
         if !id.from_pen_line {
-            self.clock.observe(&self.rig, &self.points, cands, id);
+            self.clock.observe(t, &self.rig, &self.points, cands, id);
             let residuals = id
                 .assignment
                 .iter()
