@@ -29,8 +29,9 @@ pub struct IdentifyConfig {
     /// another labelling of the same points fits within this many standard deviations of the
     /// rig's [`RangeNoise`].
     pub ambiguity_sigmas: f64,
-    /// A labelling is accepted only if every distance is within this many standard deviations
-    /// (rivals are searched with the wider `ambiguity_sigmas`).
+    /// A labelling is accepted only if every distance is within this many standard deviations,
+    /// three or more LEDs after a common scale within the pair's time-offset bound
+    /// ([`IdentifyPrior::scale_error_max`]) (rivals are searched with the wider `ambiguity_sigmas`).
     pub accept_sigmas: f64,
     /// Smallest distance band when the noise is known, metres (model and calibration errors).
     pub tolerance_floor: f64,

@@ -251,12 +251,22 @@ mod tests {
             c.add(-1e-9 * (1e6 - c.offset_ns), 1e-9);
             c.end_frame(k, 1e-4);
         }
-        assert!((c.offset_ns() - 1_000_000).abs() < 1_000, "{}", c.offset_ns());
+        assert!(
+            (c.offset_ns() - 1_000_000).abs() < 1_000,
+            "{}",
+            c.offset_ns()
+        );
         c.add(-1e-9 * 50e6, 1e-9);
         c.end_frame(21, 1e-4);
-        assert!((c.offset_ns() - 1_000_000).abs() < 1_000, "an outlier moved it");
+        assert!(
+            (c.offset_ns() - 1_000_000).abs() < 1_000,
+            "an outlier moved it"
+        );
         c.end_frame(22, 1e-4);
-        assert!((c.offset_ns() - 1_000_000).abs() < 1_000, "an empty window changes nothing");
+        assert!(
+            (c.offset_ns() - 1_000_000).abs() < 1_000,
+            "an empty window changes nothing"
+        );
     }
 
     #[test]
