@@ -37,13 +37,13 @@ pub struct ReplayArgs {
     /// Filter of the live display tip (`display_*` in track.csv).
     #[arg(long, value_enum, default_value_t = Display::OneEuro)]
     pub display: Display,
-    /// One Euro display filter: cutoff at rest, Hz (default 1.0).
+    /// One Euro display filter: cutoff at rest, Hz (default 0.5).
     #[arg(long)]
     pub min_cutoff: Option<f64>,
-    /// One Euro display filter: cutoff increase per m/s of tip speed, Hz·s/m (default 30).
+    /// One Euro display filter: cutoff increase per m/s of tip speed, Hz·s/m (default 20).
     #[arg(long)]
     pub beta: Option<f64>,
-    /// One Euro display filter: cutoff of the speed estimate, Hz (default 2.0).
+    /// One Euro display filter: cutoff of the speed estimate, Hz (default 1.5).
     #[arg(long)]
     pub d_cutoff: Option<f64>,
     /// Stop after the strokes: no curve network, surface or surface comparison.
