@@ -73,6 +73,29 @@ fn summary_lines(r: &fires_record::ReplayReport, out: &std::path::Path) -> Vec<S
         )),
         None => lines.push(format!("tracked {} strokes", r.strokes)),
     }
+    if let Some(s) = &r.strokes_summary {
+        lines.push(format!(
+            "worst stroke: {} of its true path within 3 mm of the tracked one, length ratio {} (tracked over true)",
+            percent(s.coverage_3mm.worst),
+            s.length_ratio.worst.map_or("-".into(), |x| format!("{x:.3}"))
+        ));
+    }
+    let pairs = r.vision_refusals.as_ref().and_then(|v| {
+        Some((
+            v.truly_visible.as_ref()?.vision_fraction,
+            v.truly_visible_in_strokes.as_ref()?.vision_fraction,
+        ))
+    });
+    if let (Some((all, drawing)), Some(d)) = (pairs, &r.display) {
+        lines.push(format!(
+            "vision tips from {} of the stereo pairs in which both cameras see the pen ({} while drawing); display ({}) lag {}, jitter at rest {}",
+            percent(all),
+            percent(drawing),
+            d.filter,
+            d.lag_ms.map_or("-".into(), |x| format!("{x:.0} ms")),
+            mm(d.jitter_at_rest_mm)
+        ));
+    }
     if let Some(n) = &r.network {
         lines.push(format!(
             "curve network: {} faces from {} of {} strokes -> {}",
@@ -123,4 +146,8 @@ fn summary_lines(r: &fires_record::ReplayReport, out: &std::path::Path) -> Vec<S
 
 fn mm(v: Option<f64>) -> String {
     v.map_or("-".into(), |x| format!("{x:.2} mm"))
+}
+
+fn percent(v: Option<f64>) -> String {
+    v.map_or("-".into(), |x| format!("{:.1}%", 100.0 * x))
 }
