@@ -25,7 +25,8 @@
 //!   0.01 m/s, +0.2 Hz of cutoff.
 //!
 //! Measured on the simulated rigs (60 s, seeds 1–5), display lag and jitter at rest, against the first tuning
-//! (1 Hz, 30 /m, 2 Hz): `fires-v1` 15 ms (was 10) and 0.20–0.35 mm (was 0.25–0.41); `webcam` 20 ms (was 15)
+//! (1 Hz, 30 /m, 2 Hz): `fires-v1` 15 ms (was 10) and 0.20–0.35 mm (was 0.25–0.41; 0.17–0.23 mm since the
+//! direction filter averages a still pen's axes over longer, `OrientationConfig::walk_rate`); `webcam` 20 ms (was 15)
 //! and 0.016–0.046 mm (was 0.013–0.065); `fires-v2` 30–60 ms (was 20–50). The lag targets are 20, 30 and 70 ms
 //! (docs/report.md, `display`).
 
