@@ -17,6 +17,8 @@ pub mod dead_reckon;
 pub mod imu;
 pub mod mag_calibration;
 pub mod orientation;
+#[cfg(test)]
+mod orientation_tests;
 pub mod thesis_kalman;
 pub mod tip_filter;
 pub mod world_estimate;
