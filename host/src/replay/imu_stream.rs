@@ -194,6 +194,15 @@ mod tests {
     use super::*;
     use fires_protocol::{Buttons, SensorPacket, StatusPacket};
 
+    /// The encoded sensor packet of sample `k` (its counter is `k` modulo 256).
+    fn sensor(k: u64) -> [u8; 22] {
+        SensorPacket {
+            counter: k as u8,
+            ..Default::default()
+        }
+        .encode()
+    }
+
     fn chunk(t_ns: u64, frames: &[[u8; 22]]) -> LinkChunk {
         LinkChunk {
             host_time_ns: t_ns,
@@ -207,14 +216,9 @@ mod tests {
         let jitter = [3_000_000u64, 0, 7_000_000, 1_000_000, 4_000_000];
         let chunks: Vec<LinkChunk> = (0..600u64)
             .map(|k| {
-                let p = SensorPacket {
-                    counter: k as u8,
-                    ..Default::default()
-                }
-                .encode();
                 chunk(
                     1_000_000_000 + k * period + 2_000_000 + jitter[(k % 5) as usize],
-                    &[p],
+                    &[sensor(k)],
                 )
             })
             .collect();
@@ -237,13 +241,8 @@ mod tests {
         let latency = |k: u64| 2_000_000 + (k * 7919 % 13) * 540_000;
         let chunks: Vec<LinkChunk> = (0..6000u64)
             .map(|k| {
-                let p = SensorPacket {
-                    counter: k as u8,
-                    ..Default::default()
-                }
-                .encode();
                 let sampled = 1_000_000_000 + (k as f64 * true_period) as u64;
-                chunk(sampled + latency(k), &[p])
+                chunk(sampled + latency(k), &[sensor(k)])
             })
             .collect();
         let s = imu_stream(&chunks, 230_400, 100, &ImuScale::default());
@@ -284,16 +283,7 @@ mod tests {
         let ks: Vec<u64> = (0..50).chain(400..450).collect();
         let chunks: Vec<LinkChunk> = ks
             .iter()
-            .map(|&k| {
-                chunk(
-                    k * period + 1_000_000,
-                    &[SensorPacket {
-                        counter: k as u8,
-                        ..Default::default()
-                    }
-                    .encode()],
-                )
-            })
+            .map(|&k| chunk(k * period + 1_000_000, &[sensor(k)]))
             .collect();
         let s = imu_stream(&chunks, 230_400, 100, &ImuScale::default());
         assert_eq!(s.samples.len(), 100);
@@ -306,13 +296,7 @@ mod tests {
         let period = 10_000_000u64;
         let mut frames = Vec::new();
         for k in 0..20u8 {
-            frames.push(
-                SensorPacket {
-                    counter: k,
-                    ..Default::default()
-                }
-                .encode(),
-            );
+            frames.push(sensor(u64::from(k)));
             if k == 9 || k == 14 {
                 let pressed = k == 9;
                 frames.push(
