@@ -114,6 +114,12 @@ pub fn checked_pen_geometry(meta: &Meta, tolerance: f64) -> Result<PenGeometry, 
     Ok(pen)
 }
 
+/// The tip's position relative to the accelerometer in the pen frame, metres (the tracker's
+/// [`crate::track::pipeline::TrackerConfig::imu_to_tip`]), when the recording places the accelerometer.
+pub fn imu_to_tip(meta: &Meta) -> Option<[f64; 3]> {
+    meta.pen.imu_position_m.map(|p| p.map(|v| -v))
+}
+
 /// Count -> SI conversion from the board's scale factors (magnetometer in µT, the fusion's unit).
 pub fn imu_scale(meta: &Meta) -> ImuScale {
     let s = &meta.scale_factors;

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 /// Name written in `meta.json`'s `format` field.
 pub const FORMAT_NAME: &str = "fires-recording";
 /// Format version this crate writes (`MAJOR.MINOR`); readers accept any minor of the same major.
-pub const FORMAT_VERSION: &str = "1.1";
+pub const FORMAT_VERSION: &str = "1.2";
 /// Major version this crate reads.
 pub const FORMAT_MAJOR: u32 = 1;
 
@@ -214,6 +214,11 @@ pub struct PenGeometry {
     pub led_positions_m: Vec<f64>,
     /// Distance from LED 1 to the pen tip, metres.
     pub tip_offset_m: f64,
+    /// Where the accelerometer sits in the pen frame, metres, when the recording says (format 1.2):
+    /// the lever from it to the tip turns the pen's rotation into tip acceleration the accelerometer
+    /// does not feel (`ω̇ × r + ω × (ω × r)`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub imu_position_m: Option<[f64; 3]>,
 }
 
 impl PenGeometry {
@@ -222,6 +227,7 @@ impl PenGeometry {
         PenGeometry {
             led_positions_m: vec![0.0, 0.070, 0.110, 0.160],
             tip_offset_m: 0.020,
+            imu_position_m: None,
         }
     }
 

@@ -220,6 +220,9 @@ impl Meta {
                 "must be finite and not negative (the tip lies ahead of LED 1)",
             ));
         }
+        for (k, &v) in self.pen.imu_position_m.iter().flatten().enumerate() {
+            finite(format!("pen.imu_position_m[{k}]"), v)?;
+        }
         let s = &self.scale_factors;
         for (name, v) in [
             ("accel_mps2_per_count", s.accel_mps2_per_count),

@@ -452,6 +452,7 @@ pub fn scenario(
             Pen::new(PenGeometry {
                 led_positions_m: vec![0.0, 0.081],
                 tip_offset_m: 0.0,
+                imu_position_m: None,
             }),
             None,
             MotionSpec::Free(free),
@@ -461,6 +462,7 @@ pub fn scenario(
             let mut pen = Pen::new(PenGeometry {
                 led_positions_m: vec![0.0, 0.070, 0.110, 0.160],
                 tip_offset_m: 0.0,
+                imu_position_m: None,
             });
             pen.disabled[0] = true;
             base(

@@ -16,8 +16,8 @@ use crate::scenario::{scenario, world_up, MotionSpec, Scenario};
 use crate::SimError;
 use fires_record::{
     CameraFrame, CameraStream, EncodedImage, ExposureTruth, FrameContent, ImageEncoder, ImuTruth,
-    Meta, PacketFate, PoseTruth, RecordingWriter, RigCalibration, Source, StrokeTruth, WorldTruth,
-    WriterOptions,
+    Meta, PacketFate, PenGeometry, PoseTruth, RecordingWriter, RigCalibration, Source, StrokeTruth,
+    WorldTruth, WriterOptions,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -228,7 +228,11 @@ pub fn run(
         RigCalibration {
             cameras: sc.cameras.iter().map(|c| c.cal).collect(),
         },
-        sc.pen.geometry.clone(),
+        // The board's accelerometer position is part of the pen's description, as its LEDs are.
+        PenGeometry {
+            imu_position_m: Some(sc.imu.lever_arm_m.into()),
+            ..sc.pen.geometry.clone()
+        },
         sc.cameras
             .iter()
             .enumerate()

@@ -6,7 +6,7 @@ use fires_record::{Damage, FrameContent, FrameImage, RecordError, RecordingReade
 
 use super::imu_stream::{imu_stream, ImuStream};
 use crate::meta::{
-    checked_pen_geometry, frame_timings, imu_scale, row_times_ns, stereo_rig, MetaError,
+    checked_pen_geometry, frame_timings, imu_scale, imu_to_tip, row_times_ns, stereo_rig, MetaError,
 };
 
 use super::retrack;
@@ -201,6 +201,7 @@ pub fn replay(
     let mut tracker_cfg = config.tracker.clone();
     tracker_cfg.pen = checked_pen_geometry(meta, tracker_cfg.identify.tolerance)?;
     tracker_cfg.row_time_ns = row_times_ns(meta);
+    tracker_cfg.imu_to_tip = imu_to_tip(meta).unwrap_or(tracker_cfg.imu_to_tip);
     tracker_cfg.frame_timing = frame_timings(meta);
     let content = if meta
         .cameras
