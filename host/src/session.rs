@@ -154,8 +154,11 @@ impl Session {
 
     /// An IMU sample; returns a sample while the tip is dead-reckoned through an occlusion.
     pub fn imu(&mut self, sample: &ImuSample) -> Option<SessionSample> {
-        let s = self.tracker.push_imu(sample)?;
-        Some(self.sample(s))
+        let s = self.tracker.push_imu(sample);
+        if let Some((t, a)) = self.tracker.tip_acceleration() {
+            self.segmenter.accel(t, a);
+        }
+        Some(self.sample(s?))
     }
 
     /// A camera frame's blobs; returns a sample when it pairs with the other camera.

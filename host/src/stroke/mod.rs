@@ -2,14 +2,16 @@
 //! default, the thesis's Gaussian as an option), stroke segmentation by the pen button, and the end-of-stroke post-processing
 //! (distance-threshold sampling, constrained weighted least-squares cubic B-spline, resampling).
 
+pub mod imu_bridge;
 pub mod one_euro;
 pub mod postprocess;
 pub mod record;
 pub mod segment;
 pub mod smooth;
 
+pub use imu_bridge::{imu_bridge, ImuBridgeOptions};
 pub use one_euro::{OneEuroConfig, OneEuroFilter};
 pub use postprocess::{postprocess, BSpline, PostprocessConfig, StrokeError};
 pub use record::{stroke_record, StrokeRecordConfig};
-pub use segment::{Stroke, StrokeEvent, StrokeSegmenter, TimedPoint};
+pub use segment::{Stroke, StrokeEvent, StrokeSegmenter, TimedAccel, TimedPoint};
 pub use smooth::{smooth_centred, CausalSmoother, GaussianConfig};

@@ -4,7 +4,8 @@
 
 use fires_record::{StrokePiece, StrokePoint};
 
-use super::{postprocess, PostprocessConfig, Stroke, TimedPoint};
+use super::imu_bridge::{imu_bridge, ImuBridgeOptions};
+use super::{postprocess, PostprocessConfig, Stroke, TimedAccel, TimedPoint};
 
 /// How a finished stroke becomes a record of the strokes file.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -19,6 +20,12 @@ pub struct StrokeRecordConfig {
     pub max_bridge_error_m: f64,
     /// Acceleration of a drawing hand the bridge must allow for, m/s^2.
     pub drawing_accel_mps2: f64,
+    /// Error of the IMU's tip acceleration over a gap, m/s^2: a gap too long for the chord is bridged
+    /// with the acceleration integrated between its two tips ([`imu_bridge`]) up to the length at
+    /// which this error leaves the bridge `max_bridge_error_m` off.
+    pub imu_accel_error_mps2: f64,
+    /// How the IMU bridges a gap.
+    pub imu_bridge: ImuBridgeOptions,
 }
 
 impl Default for StrokeRecordConfig {
@@ -34,6 +41,9 @@ impl Default for StrokeRecordConfig {
             // centimetres in half a second).
             max_bridge_error_m: 0.001,
             drawing_accel_mps2: 1.0,
+            // What the bridge's fit leaves of the tip acceleration's error (docs/strokes.md).
+            imu_accel_error_mps2: 0.2,
+            imu_bridge: ImuBridgeOptions::default(),
         }
     }
 }
@@ -47,11 +57,39 @@ impl StrokeRecordConfig {
         let dt = (8.0 * self.max_bridge_error_m.max(0.0) / a).sqrt();
         (dt * 1e9).min(u64::MAX as f64) as u64
     }
+
+    /// The longest gap the IMU bridges, nanoseconds: `sqrt(8 e / b)` for the acceleration error `b`.
+    pub fn max_imu_gap_ns(&self) -> u64 {
+        let b = self.imu_accel_error_mps2.max(1e-9);
+        let dt = (8.0 * self.max_bridge_error_m.max(0.0) / b).sqrt();
+        (dt * 1e9).min(u64::MAX as f64) as u64
+    }
+
+    /// How the gap between two consecutive tips is bridged, or None when it splits the stroke.
+    fn bridge(&self, tracked: &[TimedPoint], i: usize, accel: &[TimedAccel]) -> Option<Bridge> {
+        let gap = tracked[i + 1].t_ns.saturating_sub(tracked[i].t_ns);
+        if gap <= self.max_gap_ns() {
+            return Some(Bridge::Chord);
+        }
+        if gap > self.max_imu_gap_ns() {
+            return None;
+        }
+        imu_bridge(tracked, i, accel, &self.imu_bridge).map(Bridge::Imu)
+    }
+}
+
+/// The path across a gap between two consecutive tips of a piece.
+enum Bridge {
+    /// The chord (short gaps).
+    Chord,
+    /// The IMU's path, as timed points inside the gap.
+    Imu(Vec<(u64, [f64; 3])>),
 }
 
 /// The strokes-file record of `stroke`, with its stable `id` and the `buttons` held at pen-down. The raw
 /// samples are split into pieces where two consecutive ones are more than
-/// [`StrokeRecordConfig::max_gap_ns`] apart; each piece is post-processed on its own. Each output
+/// [`StrokeRecordConfig::max_gap_ns`] apart and the IMU cannot bridge them
+/// ([`StrokeRecordConfig::max_imu_gap_ns`]); each piece is post-processed on its own. Each output
 /// point gets the time at which the tip passed the same fraction of its piece's raw arc length, and
 /// the uncertainty of the raw sample nearest that time.
 pub fn stroke_record(
@@ -60,17 +98,17 @@ pub fn stroke_record(
     stroke: &Stroke,
     config: &StrokeRecordConfig,
 ) -> fires_record::Stroke {
-    let max_gap = config.max_gap_ns();
+    let pts = &stroke.points;
+    let bridges: Vec<Option<Bridge>> = (0..pts.len().saturating_sub(1))
+        .map(|i| config.bridge(pts, i, &stroke.accel))
+        .collect();
     let mut pieces = Vec::new();
     let mut start = 0;
-    for i in 1..=stroke.points.len() {
-        let split = i == stroke.points.len()
-            || stroke.points[i]
-                .t_ns
-                .saturating_sub(stroke.points[i - 1].t_ns)
-                > max_gap;
+    for i in 1..=pts.len() {
+        let split = i == pts.len() || bridges[i - 1].is_none();
         if split && i > start {
-            pieces.push(piece(&stroke.points[start..i], stroke.t_start_ns, config));
+            let inner = &bridges[start..i - 1];
+            pieces.push(piece(&pts[start..i], inner, stroke.t_start_ns, config));
             start = i;
         }
     }
@@ -109,8 +147,30 @@ pub fn stroke_record(
     record
 }
 
-/// One piece: the post-processed polyline of raw samples tracked without a gap.
-fn piece(raw: &[TimedPoint], t_start_ns: u64, config: &StrokeRecordConfig) -> StrokePiece {
+/// One piece: the post-processed polyline of raw samples tracked without a gap they could not bridge
+/// (`bridges[i]` between `tracked[i]` and `tracked[i + 1]`). The IMU's bridge points join the raw samples,
+/// carrying the uncertainty of the nearest tracked one.
+fn piece(
+    tracked: &[TimedPoint],
+    bridges: &[Option<Bridge>],
+    t_start_ns: u64,
+    config: &StrokeRecordConfig,
+) -> StrokePiece {
+    let mut raw = Vec::with_capacity(tracked.len());
+    for (i, p) in tracked.iter().enumerate() {
+        raw.push(*p);
+        if let Some(Some(Bridge::Imu(path))) = bridges.get(i) {
+            raw.extend(path.iter().map(|&(t_ns, q)| TimedPoint {
+                t_ns,
+                p: q,
+                sigma_m: match (p.sigma_m, tracked[i + 1].sigma_m) {
+                    (Some(a), Some(b)) => Some(a.max(b)),
+                    (a, b) => a.or(b),
+                },
+            }));
+        }
+    }
+    let raw = &raw[..];
     let pts: Vec<[f64; 3]> = raw.iter().map(|p| p.p).collect();
     let polyline = if pts.len() >= 2 {
         let step = config.postprocess.sample_threshold;
@@ -237,6 +297,7 @@ mod tests {
             t_start_ns: 1_000_000_000,
             t_end_ns: 3_000_000_000,
             points,
+            accel: Vec::new(),
         }
     }
 
@@ -346,6 +407,7 @@ mod tests {
             t_start_ns: 1_000_000_000,
             t_end_ns: 2_200_000_000,
             points,
+            accel: Vec::new(),
         };
         let rec = stroke_record(0, 0, &stroke, &Default::default());
         assert_eq!(rec.pieces.len(), 1);

@@ -15,6 +15,16 @@ pub struct TimedPoint {
     pub sigma_m: Option<f64>,
 }
 
+/// The tip's world-frame acceleration (gravity removed) from one IMU sample, for bridging gaps
+/// between vision tips ([`super::imu_bridge`]).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TimedAccel {
+    /// Time, nanoseconds.
+    pub t_ns: u64,
+    /// Acceleration, m/s^2.
+    pub a: [f64; 3],
+}
+
 /// A finished stroke.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Stroke {
@@ -24,6 +34,10 @@ pub struct Stroke {
     pub t_end_ns: u64,
     /// Raw tip samples in time order.
     pub points: Vec<TimedPoint>,
+    /// The tip's acceleration from the IMU while the stroke was drawn, in time order (empty when the
+    /// tracker had no orientation and world reference to compute it).
+    #[serde(default)]
+    pub accel: Vec<TimedAccel>,
 }
 
 /// What a button change did.
@@ -74,6 +88,7 @@ impl StrokeSegmenter {
                     t_start_ns: t_ns,
                     t_end_ns: t_ns,
                     points: Vec::new(),
+                    accel: Vec::new(),
                 });
                 Some(StrokeEvent::Started { t_ns })
             }
@@ -84,6 +99,7 @@ impl StrokeSegmenter {
             (false, Some(mut stroke)) => {
                 stroke.t_end_ns = t_ns;
                 stroke.points.retain(|p| p.t_ns <= t_ns);
+                stroke.accel.retain(|a| a.t_ns <= t_ns);
                 if stroke.points.len() >= self.min_points {
                     Some(StrokeEvent::Ended(stroke))
                 } else {
@@ -106,6 +122,18 @@ impl StrokeSegmenter {
             if t_ns >= stroke.t_start_ns && in_order && p.iter().all(|v| v.is_finite()) {
                 let sigma_m = sigma_m.filter(|s| s.is_finite() && *s >= 0.0);
                 stroke.points.push(TimedPoint { t_ns, p, sigma_m });
+            }
+        }
+    }
+}
+
+impl StrokeSegmenter {
+    /// The tip's acceleration at `t_ns` (world frame, m/s^2); kept while a stroke is open, in time order.
+    pub fn accel(&mut self, t_ns: u64, a: [f64; 3]) {
+        if let Some(stroke) = self.current.as_mut() {
+            let in_order = stroke.accel.last().is_none_or(|l| l.t_ns < t_ns);
+            if t_ns >= stroke.t_start_ns && in_order && a.iter().all(|v| v.is_finite()) {
+                stroke.accel.push(TimedAccel { t_ns, a });
             }
         }
     }

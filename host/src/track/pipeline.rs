@@ -204,6 +204,8 @@ pub struct Tracker {
     /// The rig's measured blob-centroid noise, which scales the tip's expected noise.
     pixel_noise: PixelNoise,
     last_gyro: Option<(u64, Vector3<f64>)>,
+    /// The tip's world acceleration from the last IMU sample, when orientation and world were known.
+    tip_accel: Option<(u64, Vector3<f64>)>,
     occluded: bool,
     /// Why the last pair gave no vision tip (None when it gave one).
     last_refusal: Option<Refusal>,
@@ -230,6 +232,7 @@ impl Tracker {
             tip_filter: TipFilter::new(config.tip_filter),
             pixel_noise: PixelNoise::new(config.correspondence.pixel_sigma),
             last_gyro: None,
+            tip_accel: None,
             occluded: false,
             last_refusal: None,
             rig,
@@ -275,17 +278,25 @@ impl Tracker {
         self.last_refusal
     }
 
+    /// The tip's world-frame acceleration (gravity removed, the lever [`TrackerConfig::imu_to_tip`]
+    /// included) from the last IMU sample: time and m/s^2; None before orientation and world are known.
+    pub fn tip_acceleration(&self) -> Option<(u64, [f64; 3])> {
+        self.tip_accel.map(|(t, a)| (t, a.into()))
+    }
+
     /// Feeds one IMU sample. While the tip is occluded this returns a dead-reckoned (or, after the
     /// time limit, lost) sample; otherwise None (frames produce the samples).
     pub fn push_imu(&mut self, sample: &ImuSample) -> Option<TrackSample> {
         let sample = &self.direction.calibrated_mag(sample);
         self.direction.imu(sample);
+        self.tip_accel = None;
         if let (Some(q), Some(world)) = (
             self.direction.orientation_at(sample.t_ns),
             self.direction.world().copied(),
         ) {
             let linear = q * self.tip_specific_force(sample) - world.up() * world.gravity;
             self.tip_filter.push_accel(sample.t_ns, linear);
+            self.tip_accel = Some((sample.t_ns, linear));
         }
         self.last_gyro = Some((sample.t_ns, Vector3::from(sample.gyro)));
         if !self.occluded {
