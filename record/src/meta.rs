@@ -222,12 +222,13 @@ pub struct PenGeometry {
 }
 
 impl PenGeometry {
-    /// The FIRES pen: spacings 70/40/50 mm, so LEDs at 0, 70, 110, 160 mm; tip 20 mm beyond LED 1.
+    /// The FIRES pen: spacings 70/40/50 mm, so LEDs at 0, 70, 110, 160 mm; tip 20 mm beyond LED 1; the
+    /// board's accelerometer on the axis 100 mm behind the tip (hardware-docs/pen-geometry.md).
     pub fn fires_default() -> Self {
         PenGeometry {
             led_positions_m: vec![0.0, 0.070, 0.110, 0.160],
             tip_offset_m: 0.020,
-            imu_position_m: None,
+            imu_position_m: Some([-0.100, 0.0, 0.0]),
         }
     }
 

@@ -31,7 +31,7 @@ use crate::clock::HostClock;
 use crate::link::{
     ButtonChange, LinkError, LinkEvent, LiveImuTimer, SerialConfig, SerialLink, TimedLinkEvent,
 };
-use crate::meta::{checked_pen_geometry, imu_scale, stereo_rig};
+use crate::meta::{checked_pen_geometry, imu_scale, imu_to_tip, stereo_rig};
 use crate::session::{Session, SessionSample, StrokeConfig};
 use crate::stereo::CameraId;
 use crate::track::fusion::ImuSample;
@@ -174,6 +174,7 @@ pub fn run_live(
     let mut tracker_cfg = cfg.tracker.clone();
     tracker_cfg.pen = checked_pen_geometry(&meta, tracker_cfg.identify.tolerance)
         .map_err(|e| LiveError::Tracker(e.to_string()))?;
+    tracker_cfg.imu_to_tip = imu_to_tip(&meta).unwrap_or(tracker_cfg.imu_to_tip);
     let tracker = Tracker::new(rig.clone(), tracker_cfg.clone())
         .map_err(|e| LiveError::Tracker(e.to_string()))?;
     let mut session = Session::new(tracker, cfg.strokes);
