@@ -1,7 +1,7 @@
 //! The IMU bridge across a gap between vision tips (`fires_host::stroke::imu_bridge`): exact on a path
 //! whose acceleration it integrates exactly, blind to a constant acceleration error when it can fit one,
 //! within `b T² / 8` of the pen when it can only pin the ends, and refused where the samples do not cover
-//! the gap; `stroke_record` keeps a stroke whole across a gap it bridges and splits it where it cannot.
+//! the gap or the tips around it disagree with the IMU; `stroke_record` keeps a stroke whole across a gap it bridges and splits it where it cannot.
 
 use fires_host::stroke::{
     imu_bridge, stroke_record, ImuBridgeOptions, Stroke, StrokeRecordConfig, TimedAccel, TimedPoint,
@@ -118,6 +118,25 @@ fn with_only_the_two_ends_the_bridge_is_pinned_and_within_b_t_squared_over_8() {
     assert!(
         (0..3).all(|k| (a[k] - qa[k]).abs() < bound * 0.3 && (b[k] - qb[k]).abs() < bound * 0.3)
     );
+}
+
+#[test]
+fn tips_around_the_gap_that_disagree_with_the_imu_bridge_nothing() {
+    // The two tips before the gap hooked 2.5 mm sideways (the pen turning into a view the cameras
+    // could not resolve): the fit's acceleration would carry that across the gap.
+    let (mut tips, accel) = session(17, (204, 408), [0.0; 3], cubic);
+    let i = gap_index(&tips);
+    for tip in &mut tips[i - 1..=i] {
+        tip.p[1] += 2.5e-3;
+        tip.sigma_m = Some(1e-4);
+    }
+    let options = ImuBridgeOptions::default();
+    assert!(imu_bridge(&tips, i, &accel, &options).is_none());
+    // The same miss from tips whose noise explains it (1 mm per axis) is bridged.
+    for tip in &mut tips[i - 1..=i] {
+        tip.sigma_m = Some(1e-3);
+    }
+    assert!(imu_bridge(&tips, i, &accel, &options).is_some());
 }
 
 #[test]

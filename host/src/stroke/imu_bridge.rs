@@ -6,7 +6,8 @@
 //! and `c1` are the position and velocity that double integration leaves open, `c2` absorbs the
 //! acceleration's own slowly varying error (the gravity that an orientation error of 1° leaks in, 0.17
 //! m/s², and the accelerometer's bias), so what is left is only the error's variation over the gap.
-//! With fewer than three tips the path is pinned to the gap's two ends (`c2 = 0`). This is the use of the
+//! With fewer than four tips the path is pinned to the gap's two ends (`c2 = 0`); a fit that misses one of
+//! its tips by more than [`ImuBridgeOptions::max_fit_residual_m`] bridges nothing. This is the use of the
 //! IMU between camera frames that the FIRES thesis, §4.1.4, proposes for occlusions, with both sides held
 //! by vision; docs/strokes.md gives the measured errors.
 
@@ -21,6 +22,11 @@ pub struct ImuBridgeOptions {
     pub fit_window_ns: u64,
     /// The acceleration samples may be at most this far apart (and from the gap's ends), nanoseconds.
     pub max_sample_gap_ns: u64,
+    /// A fitted path that misses one of its own tips by more than this (or, for a noisier tip, more
+    /// than its noise explains) is no bridge, metres: the tips
+    /// around the gap disagree with the IMU (tips hooked as the pen turned into a view the cameras
+    /// could not resolve, whose error the fit's acceleration term would carry across the gap).
+    pub max_fit_residual_m: f64,
 }
 
 impl Default for ImuBridgeOptions {
@@ -30,13 +36,15 @@ impl Default for ImuBridgeOptions {
             fit_window_ns: 100_000_000,
             // Three 100 Hz samples: a lost packet or two, not a link outage.
             max_sample_gap_ns: 30_000_000,
+            // The strokes' bridge error (`StrokeRecordConfig::max_bridge_error_m`).
+            max_fit_residual_m: 0.001,
         }
     }
 }
 
 /// The bridge across the gap between `tracked[gap]` and `tracked[gap + 1]`, as timed points at the
 /// acceleration samples inside it; None when the samples leave part of the gap uncovered (so that the
-/// integral would be a guess) or the gap is not one.
+/// integral would be a guess), the tips around it disagree with the IMU, or the gap is not one.
 ///
 /// `tracked` and `accel` are in time order. The acceleration is linear between samples and held at the
 /// nearest sample beyond them.
@@ -83,7 +91,8 @@ pub fn imu_bridge(
     let path = DoubleIntegral::new(accel, start, fit.last()?.t_ns.max(t1))?;
     let tau = |t: u64| (t as f64 - t0 as f64) * 1e-9;
     let residual = |p: &TimedPoint| Vector3::from(p.p) - path.at(p.t_ns);
-    let c = if fit.len() >= 3 {
+    // Four tips or more: the quadratic has three per axis, and the fourth checks it.
+    let c = if fit.len() >= 4 {
         // Least squares of c0 + c1 τ + c2 τ²/2 against p - D, the same 3x3 normal matrix for every axis.
         let mut n = Matrix3::zeros();
         let mut rhs = Matrix3::zeros();
@@ -93,7 +102,20 @@ pub fn imu_bridge(
             n += row * row.transpose();
             rhs += row * residual(p).transpose();
         }
-        n.lu().solve(&rhs)?
+        let c = n.lu().solve(&rhs)?;
+        // A miss is beyond both the allowed error and what the tip's own noise explains (3.4 σ per
+        // axis: 1% of three-dimensional normal errors lie further out).
+        let misses = |p: &&TimedPoint| {
+            let x = tau(p.t_ns);
+            let allowed = options
+                .max_fit_residual_m
+                .max(3.4 * p.sigma_m.unwrap_or(0.0));
+            (residual(p) - c.transpose() * Vector3::new(1.0, x, 0.5 * x * x)).norm() > allowed
+        };
+        if fit.iter().any(misses) {
+            return None;
+        }
+        c
     } else {
         let (r0, r1) = (residual(a), residual(b));
         let mut c = Matrix3::zeros();
