@@ -105,8 +105,10 @@ fn distortion_pen_streams_and_link_are_checked() {
     );
     assert!(problem(|m| m.pen.led_positions_m[0] = 0.01).starts_with("pen.led_positions_m[0]"));
     assert!(problem(|m| m.pen.tip_offset_m = -0.02).starts_with("pen.tip_offset_m = -0.02"));
-    assert!(problem(|m| m.pen.imu_position_m = Some([-0.1, f64::NAN, 0.0]))
-        .starts_with("pen.imu_position_m[1] = NaN"));
+    assert!(
+        problem(|m| m.pen.imu_position_m = Some([-0.1, f64::NAN, 0.0]))
+            .starts_with("pen.imu_position_m[1] = NaN")
+    );
     assert!(problem(|m| m.cameras[0].id = 2).starts_with("cameras[0].id = 2"));
     assert!(
         problem(|m| m.cameras[0].nominal_rate_hz = 0.0).starts_with("cameras[0].nominal_rate_hz")
