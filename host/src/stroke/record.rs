@@ -53,15 +53,18 @@ impl StrokeRecordConfig {
     /// with acceleration `a` leaves its chord by at most `a dt^2 / 8` over a gap `dt`, so the gap
     /// limit is `sqrt(8 e / a)` for the bridge error `e`.
     pub fn max_gap_ns(&self) -> u64 {
-        let a = self.drawing_accel_mps2.max(1e-9);
-        let dt = (8.0 * self.max_bridge_error_m.max(0.0) / a).sqrt();
-        (dt * 1e9).min(u64::MAX as f64) as u64
+        self.gap_for_accel_error(self.drawing_accel_mps2)
     }
 
     /// The longest gap the IMU bridges, nanoseconds: `sqrt(8 e / b)` for the acceleration error `b`.
     pub fn max_imu_gap_ns(&self) -> u64 {
-        let b = self.imu_accel_error_mps2.max(1e-9);
-        let dt = (8.0 * self.max_bridge_error_m.max(0.0) / b).sqrt();
+        self.gap_for_accel_error(self.imu_accel_error_mps2)
+    }
+
+    /// The gap over which a path off by acceleration `a` leaves its bridge `max_bridge_error_m` off
+    /// (`a dt^2 / 8`), nanoseconds.
+    fn gap_for_accel_error(&self, a: f64) -> u64 {
+        let dt = (8.0 * self.max_bridge_error_m.max(0.0) / a.max(1e-9)).sqrt();
         (dt * 1e9).min(u64::MAX as f64) as u64
     }
 

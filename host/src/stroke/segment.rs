@@ -125,9 +125,7 @@ impl StrokeSegmenter {
             }
         }
     }
-}
 
-impl StrokeSegmenter {
     /// The tip's acceleration at `t_ns` (world frame, m/s^2); kept while a stroke is open, in time order.
     pub fn accel(&mut self, t_ns: u64, a: [f64; 3]) {
         if let Some(stroke) = self.current.as_mut() {
