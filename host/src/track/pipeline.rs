@@ -33,6 +33,7 @@ mod config;
 mod labelling;
 mod line_order;
 mod merged;
+mod pattern;
 mod pen_fit;
 mod pen_image;
 mod pen_line;
@@ -66,6 +67,11 @@ use nalgebra::Vector3;
 use pixel_noise::PixelNoise;
 use prior::DirectionPrior;
 use safety::LabelGuard;
+
+/// How old the last vision tip may be to place the pen for labelling a frame by its pattern,
+/// nanoseconds: drawing moves the pen a few centimetres in depth over this, within the pattern's
+/// scale bound.
+const PATTERN_GUESS_MAX_AGE_NS: u64 = 3_000_000_000;
 
 /// The blobs of one camera image, in distorted pixel coordinates.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -207,6 +213,9 @@ pub struct Tracker {
     /// The tip's world acceleration from the last IMU sample, when orientation and world were known.
     tip_accel: Option<(u64, Vector3<f64>)>,
     occluded: bool,
+    /// The last vision tip and its time: where the pen is believed to be for labelling a frame
+    /// by its pattern after a loss (`pipeline/pattern.rs`).
+    last_vision_tip: Option<(u64, Vector3<f64>)>,
     /// Why the last pair gave no vision tip (None when it gave one).
     last_refusal: Option<Refusal>,
 }
@@ -234,6 +243,7 @@ impl Tracker {
             last_gyro: None,
             tip_accel: None,
             occluded: false,
+            last_vision_tip: None,
             last_refusal: None,
             rig,
             config,
@@ -329,6 +339,8 @@ impl Tracker {
         // With a rolling shutter the frame's time becomes that of the rows its blobs lie on.
         let t = self.align.push(this, t, frame.blobs, frame.radii);
         self.align.set_shapes(this, frame.shapes);
+        let guess = self.pen_guess(t);
+        self.align.set_guess(this, guess);
         let t_other = self.align.current(other)?.t_ns;
         if t.abs_diff(t_other) > self.config.max_pair_dt_ns {
             return None;
@@ -484,6 +496,7 @@ impl Tracker {
         self.direction.mark_vision(t);
         self.remember_labels(this, t, id, &estimate);
         self.reckoner.observe(t, &estimate.tip);
+        self.last_vision_tip = Some((t, estimate.tip));
         self.occluded = false;
         let fused_axis = self.config.direction_source == DirectionSource::Fused
             && self.direction.fused(t).is_some();
@@ -511,6 +524,18 @@ impl Tracker {
             interference: id.interference,
             tip_sigma_m: sigma,
         }
+    }
+
+    /// Where the pen is believed to be at `t` for labelling a frame by its pattern: the last
+    /// vision tip (at most [`PATTERN_GUESS_MAX_AGE_NS`] old) along the direction prior (None
+    /// without a world reference or once the prior timed out).
+    fn pen_guess(&self, t: u64) -> Option<pattern::PenGuess> {
+        let (tv, tip) = self.last_vision_tip?;
+        if t.abs_diff(tv) > PATTERN_GUESS_MAX_AGE_NS {
+            return None;
+        }
+        let (direction, _) = self.direction.prior(t)?;
+        Some(pattern::PenGuess { tip, direction })
     }
 
     /// Keeps a labelled frame for the next frames ([`LabelGuard::remember`]).

@@ -13,6 +13,7 @@
 //! using a single view from a rolling shutter camera", ECCV 2006, model the same per-row times).
 
 use super::line_order::{match_along_line, LineOrderOptions};
+use super::pattern::{label_by_pattern, PatternOptions, PenGuess};
 use super::TrackerConfig;
 use crate::stereo::{CameraId, CameraModel, StereoRig};
 use crate::track::pen::LED_COUNT;
@@ -36,6 +37,9 @@ pub(super) struct KeptFrame {
     /// Per blob, when it was exposed after `t_ns` (its row's rolling-shutter delay), nanoseconds;
     /// empty for a global shutter (every blob at `t_ns`).
     pub(super) blob_delay_ns: Vec<f64>,
+    /// Where the pen was believed to be at `t_ns` (the last vision tip and the inertial
+    /// direction), for labelling the frame by its pattern when no recent vision pose predicts it.
+    pub(super) guess: Option<PenGuess>,
 }
 
 impl KeptFrame {
@@ -80,6 +84,7 @@ impl CameraHistory {
             radii,
             shapes: Vec::new(),
             blob_delay_ns,
+            guess: None,
         });
     }
 
@@ -105,6 +110,10 @@ pub(super) struct AlignOptions {
     /// A blob centre's noise, pixels: the floor under which a measured image acceleration is
     /// noise, not motion.
     pub(super) pixel_sigma: f64,
+    /// The pen's axial LED offsets and tip offset, for the LED images of a [`PenGuess`].
+    pub(super) pen: crate::track::pen::PenGeometry,
+    /// How a frame is labelled by its pattern ([`label_by_pattern`]).
+    pub(super) pattern: PatternOptions,
 }
 
 impl AlignOptions {
@@ -116,6 +125,8 @@ impl AlignOptions {
             max_blob_motion_px: config.max_blob_motion_px,
             row_time_ns: config.row_time_ns,
             pixel_sigma: config.correspondence.pixel_sigma,
+            pen: config.pen,
+            pattern: PatternOptions::default(),
         }
     }
 }
@@ -227,6 +238,14 @@ impl TimeAlignment {
     pub(super) fn set_shapes(&mut self, cam: usize, shapes: Vec<[f64; 3]>) {
         if let Some(f) = self.cameras[cam].current.as_mut() {
             f.shapes = shapes;
+        }
+    }
+
+    /// Keeps where the pen was believed to be with the newest frame of camera `cam` (see
+    /// [`KeptFrame::guess`]).
+    pub(super) fn set_guess(&mut self, cam: usize, guess: Option<PenGuess>) {
+        if let Some(f) = self.cameras[cam].current.as_mut() {
+            f.guess = guess;
         }
     }
 
@@ -430,7 +449,8 @@ impl TimeAlignment {
 
     /// Blob index of every LED in a frame: its labels when a vision sample labelled it, otherwise
     /// the blob nearest each predicted LED image, accepted only when it is unambiguous (within a
-    /// third of the smallest predicted LED spacing, and alone there).
+    /// third of the smallest predicted LED spacing, and alone there); with no recent vision pose,
+    /// the LEDs its pattern gives from the frame's [`PenGuess`] (`pipeline/pattern.rs`).
     pub(super) fn frame_identities(
         &self,
         rig: &StereoRig,
@@ -442,7 +462,12 @@ impl TimeAlignment {
         }
         let mut ids = [None; LED_COUNT];
         let Some(px) = self.predicted_images(rig, camera, frame.t_ns) else {
-            return ids;
+            let pen = &self.options.pen;
+            return frame
+                .guess
+                .and_then(|g| g.images(rig, camera, &pen.led_offsets, pen.tip_offset))
+                .and_then(|px| label_by_pattern(&px, &frame.blobs, &self.options.pattern))
+                .unwrap_or(ids);
         };
         let mut spacing = self.options.max_blob_motion_px;
         for (a, pa) in px.iter().enumerate() {
@@ -585,6 +610,11 @@ mod tests {
         max_blob_motion_px: 40.0,
         row_time_ns: [0.0; 2],
         pixel_sigma: 0.0,
+        pen: PenGeometry {
+            led_offsets: [0.0, 0.070, 0.110, 0.160],
+            tip_offset: 0.0,
+        },
+        pattern: PatternOptions::DEFAULT,
     };
 
     fn rig() -> StereoRig {
@@ -672,6 +702,7 @@ mod tests {
             radii: Vec::new(),
             shapes: Vec::new(),
             blob_delay_ns: Vec::new(),
+            guess: None,
         };
         assert_eq!(
             a.frame_identities(&rig, CameraId::Left, &frame),
@@ -690,6 +721,57 @@ mod tests {
         crowded.blobs.push([px[0][0] - 0.3, px[0][1]]);
         let ids = a.frame_identities(&rig, CameraId::Left, &crowded);
         assert_eq!(ids, [None, Some(2), Some(1), Some(0)]);
+    }
+
+    /// After a loss no vision pose predicts a frame: its blobs are labelled by the pattern of the
+    /// pen placed where it was last seen along the inertial direction, though it has moved 30 mm
+    /// since and turned by 3 degrees; without that guess, or with the pen turned end for end,
+    /// nothing is labelled.
+    #[test]
+    fn frames_after_a_loss_are_labelled_by_the_pens_pattern() {
+        let rig = rig();
+        let a = TimeAlignment::new(OPTIONS);
+        let (turn_s, turn_c) = 3f64.to_radians().sin_cos();
+        let dir = Vector3::new(turn_c, turn_s, 0.0);
+        let tip = Vector3::new(0.08, 0.02, 0.82);
+        let seen: Vec<[f64; 2]> = [0.0, 0.070, 0.110, 0.160]
+            .iter()
+            .map(|l| rig.project(CameraId::Left, &(tip - dir * *l)).unwrap())
+            .collect();
+        // LED 1 hidden by the hand, a reflection, the order shuffled.
+        let blobs = vec![seen[3], [100.0, 700.0], seen[1], seen[2]];
+        let guess = PenGuess {
+            tip: Vector3::new(0.05, 0.0, 0.8),
+            direction: Vector3::x(),
+        };
+        let frame = KeptFrame {
+            blobs,
+            guess: Some(guess),
+            ..KeptFrame::default()
+        };
+        assert_eq!(
+            a.frame_identities(&rig, CameraId::Left, &frame),
+            [None, Some(2), Some(3), Some(0)]
+        );
+        let unguessed = KeptFrame {
+            guess: None,
+            ..frame.clone()
+        };
+        assert_eq!(
+            a.frame_identities(&rig, CameraId::Left, &unguessed),
+            [None; LED_COUNT]
+        );
+        let reversed = KeptFrame {
+            guess: Some(PenGuess {
+                direction: -Vector3::x(),
+                ..guess
+            }),
+            ..frame
+        };
+        assert_eq!(
+            a.frame_identities(&rig, CameraId::Left, &reversed),
+            [None; LED_COUNT]
+        );
     }
 
     /// Blobs moving at constant image velocity are moved exactly to the target time, using the

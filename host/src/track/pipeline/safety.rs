@@ -355,6 +355,11 @@ mod tests {
                 max_blob_motion_px: 40.0,
                 row_time_ns: [0.0; 2],
                 pixel_sigma: 0.0,
+                pen: PenGeometry {
+                    led_offsets: [0.0, 0.070, 0.110, 0.160],
+                    tip_offset: 0.0,
+                },
+                pattern: crate::track::pipeline::pattern::PatternOptions::DEFAULT,
             });
             for (cam, camera) in [CameraId::Left, CameraId::Right].into_iter().enumerate() {
                 let blobs = leds
