@@ -12,7 +12,8 @@
 //! 3. *Stereo*: epipolar and ray-gap gates and triangulation ([`crate::stereo::correspond`]).
 //! 4. *Identification* ([`super::identify`]) with the fused direction and the previous labels as
 //!    priors (`pipeline/prior.rs`); a pair refused with two LED spots merged in one camera can
-//!    still be labelled from the other camera and the pen's rigid line (`pipeline/merged.rs`).
+//!    still be labelled from the other camera and the pen's rigid line (`pipeline/merged.rs`), and
+//!    one refused as ambiguous by both frames' own LED identities (`pipeline/frame_labels.rs`).
 //! 5. *Safety*: the tracker's own checks of the labelling, on the labelled pen's eq. 4.13 model
 //!    along the vision axis (`pipeline/safety.rs`); the first pair after a loss whose frames are
 //!    far apart in time keeps its labels but gives no tip (its blobs could not be moved).
@@ -30,6 +31,7 @@
 mod align;
 mod clock_offset;
 mod config;
+mod frame_labels;
 mod labelling;
 mod line_order;
 mod merged;
@@ -309,6 +311,8 @@ impl Tracker {
             self.tip_accel = Some((sample.t_ns, linear));
         }
         self.last_gyro = Some((sample.t_ns, Vector3::from(sample.gyro)));
+        self.align
+            .push_gyro(sample.t_ns, Vector3::from(sample.gyro));
         if !self.occluded {
             return None;
         }
@@ -399,11 +403,14 @@ impl Tracker {
                     IdentifyError::ContradictedByImage => RefusedBy::ImageEvidence,
                     IdentifyError::Ambiguous => RefusedBy::Rival,
                 });
-                let completed = self.complete_merged_pair(t, by).or_else(|| {
-                    (!merged::is_conflict(by))
-                        .then(|| self.complete_pen_line(t))
-                        .flatten()
-                });
+                let completed = self
+                    .complete_merged_pair(t, by)
+                    .or_else(|| {
+                        (!merged::is_conflict(by))
+                            .then(|| self.complete_pen_line(t))
+                            .flatten()
+                    })
+                    .or_else(|| self.complete_from_frame_labels(by));
                 match completed {
                     Some(id) => id,
                     None => return self.refused(t, Refusal::Identify(by)),
@@ -527,15 +534,22 @@ impl Tracker {
     }
 
     /// Where the pen is believed to be at `t` for labelling a frame by its pattern: the last
-    /// vision tip (at most [`PATTERN_GUESS_MAX_AGE_NS`] old) along the direction prior (None
-    /// without a world reference or once the prior timed out).
+    /// vision tip (at most [`PATTERN_GUESS_MAX_AGE_NS`] old) along the orientation filter's
+    /// direction (None without a world reference).
     fn pen_guess(&self, t: u64) -> Option<pattern::PenGuess> {
         let (tv, tip) = self.last_vision_tip?;
         if t.abs_diff(tv) > PATTERN_GUESS_MAX_AGE_NS {
             return None;
         }
-        let (direction, _) = self.direction.prior(t)?;
-        Some(pattern::PenGuess { tip, direction })
+        // The inertial direction itself, not the identification prior (which times out a second
+        // into a loss): the pattern's turn bound refuses a direction that has drifted.
+        let direction = self.direction.direction_at(t)?;
+        let orientation = self.direction.orientation_at(t)?;
+        Some(pattern::PenGuess {
+            tip,
+            direction,
+            orientation,
+        })
     }
 
     /// Keeps a labelled frame for the next frames ([`LabelGuard::remember`]).

@@ -13,7 +13,7 @@
 //! using a single view from a rolling shutter camera", ECCV 2006, model the same per-row times).
 
 use super::line_order::{match_along_line, LineOrderOptions};
-use super::pattern::{label_by_pattern, PatternOptions, PenGuess};
+use super::pattern::{label_by_pattern, GyroHistory, PatternOptions, PenGuess};
 use super::TrackerConfig;
 use crate::stereo::{CameraId, CameraModel, StereoRig};
 use crate::track::pen::LED_COUNT;
@@ -190,6 +190,8 @@ pub(super) struct TimeAlignment {
     pen_history: [Option<(u64, [Vector3<f64>; LED_COUNT])>; 2],
     /// The measured blob-centre noise over the configured one ([`AlignOptions::pixel_sigma`]).
     noise_scale: f64,
+    /// The gyro's last samples: how the pen turned between a blob's frames and the pair.
+    gyro: GyroHistory,
 }
 
 impl TimeAlignment {
@@ -200,7 +202,13 @@ impl TimeAlignment {
             cameras: Default::default(),
             pen_history: [None; 2],
             noise_scale: 1.0,
+            gyro: GyroHistory::default(),
         }
+    }
+
+    /// Keeps a gyro sample (pen frame, rad/s) for the turn part of the blobs' motion.
+    pub(super) fn push_gyro(&mut self, t_ns: u64, rate: Vector3<f64>) {
+        self.gyro.push(t_ns, rate);
     }
 
     /// Sets the measured blob-centre noise as a factor of the configured one.
@@ -368,6 +376,25 @@ impl TimeAlignment {
         );
         let project =
             |leds: Option<[Vector3<f64>; LED_COUNT]>, k: usize| rig.project(camera, &leds?[k]).ok();
+        // The image motion of LED k between two times that the pen's turn alone causes (the
+        // tip held where vision last saw it), from the frame's own guess turned by the gyro's
+        // rates; zero without them.
+        let pen = &self.options.pen;
+        let turn = |k: usize, t0: f64, t1: f64| -> [f64; 2] {
+            let Some(g) = cur.guess else {
+                return [0.0; 2];
+            };
+            let lever = pen.led_offsets[k] + pen.tip_offset;
+            let at = |tt: f64| {
+                let r = self.gyro.rotation(cur.t_ns as f64, tt)?;
+                let d = g.orientation * r * Vector3::x();
+                rig.project(camera, &(g.tip - d * lever)).ok()
+            };
+            match (at(t0), at(t1)) {
+                (Some(a), Some(b)) => [b[0] - a[0], b[1] - a[1]],
+                _ => [0.0; 2],
+            }
+        };
         let mut out = Vec::new();
         for (k, id) in cur_ids.iter().enumerate() {
             let Some(i) = *id else { continue };
@@ -379,15 +406,24 @@ impl TimeAlignment {
                 let j = ids[k]?;
                 let q = p.blobs[j];
                 let dt = cur.blob_time(i) - p.blob_time(j);
-                let near = (b[0] - q[0]).hypot(b[1] - q[1]) <= self.options.max_blob_motion_px;
-                let v = (near && dt > 0.0).then(|| [(b[0] - q[0]) / dt, (b[1] - q[1]) / dt])?;
+                let near = (b[0] - q[0]).hypot(b[1] - q[1]) <= self.motion_limit_px(dt);
+                // The velocity of the motion the turn does not explain.
+                let r = turn(k, p.blob_time(j), cur.blob_time(i));
+                let v = (near && dt > 0.0)
+                    .then(|| [(b[0] - q[0] - r[0]) / dt, (b[1] - q[1] - r[1]) / dt])?;
                 // The same LED one frame earlier: the acceleration between the two velocities.
                 let before = older.zip(older_ids).and_then(|(o, ids)| {
                     let n = ids[k]?;
                     let r = o.blobs[n];
                     let dt0 = p.blob_time(j) - o.blob_time(n);
-                    let near = (q[0] - r[0]).hypot(q[1] - r[1]) <= self.options.max_blob_motion_px;
-                    (near && dt0 > 0.0).then(|| ([(q[0] - r[0]) / dt0, (q[1] - r[1]) / dt0], dt0))
+                    let near = (q[0] - r[0]).hypot(q[1] - r[1]) <= self.motion_limit_px(dt0);
+                    let w = turn(k, o.blob_time(n), p.blob_time(j));
+                    (near && dt0 > 0.0).then(|| {
+                        (
+                            [(q[0] - r[0] - w[0]) / dt0, (q[1] - r[1] - w[1]) / dt0],
+                            dt0,
+                        )
+                    })
                 });
                 if let Some((v0, dt0)) = before {
                     let a = [
@@ -412,6 +448,8 @@ impl TimeAlignment {
                     let c = 0.5 * own_shift * (dt + own_shift) * keep;
                     correction = [a[0] * c, a[1] * c];
                 }
+                let m = turn(k, cur.blob_time(i), cur.blob_time(i) + own_shift);
+                correction = [correction[0] + m[0], correction[1] + m[1]];
                 Some(v)
             });
             let v = measured.or_else(|| {
@@ -476,33 +514,24 @@ impl TimeAlignment {
         if frame.labels.iter().any(Option::is_some) {
             return frame.labels;
         }
-        let mut ids = [None; LED_COUNT];
-        let Some(px) = self.predicted_images(rig, camera, frame.t_ns) else {
-            let pen = &self.options.pen;
-            return frame
-                .guess
-                .and_then(|g| g.images(rig, camera, &pen.led_offsets, pen.tip_offset))
-                .and_then(|px| label_by_pattern(&px, &frame.blobs, &self.options.pattern))
-                .unwrap_or(ids);
-        };
-        let mut spacing = self.options.max_blob_motion_px;
-        for (a, pa) in px.iter().enumerate() {
-            for pb in &px[a + 1..] {
-                spacing = spacing.min((pa[0] - pb[0]).hypot(pa[1] - pb[1]));
-            }
+        let predicted = self
+            .predicted_images(rig, camera, frame.t_ns)
+            .map(|px| nearest_identities(&px, &frame.blobs, self.options.max_blob_motion_px));
+        if predicted.is_some_and(|ids| ids.iter().flatten().count() >= 3) {
+            return predicted.unwrap_or_default();
         }
-        let gate = spacing / 3.0;
-        for (k, p) in px.iter().enumerate() {
-            let mut near = frame
-                .blobs
-                .iter()
-                .enumerate()
-                .filter(|(_, b)| (b[0] - p[0]).hypot(b[1] - p[1]) <= gate);
-            if let (Some((i, _)), None) = (near.next(), near.next()) {
-                ids[k] = Some(i);
-            }
+        // No prediction, or one that a turn of the pen has left behind: the pattern, unless it
+        // contradicts what the prediction did find.
+        let pen = &self.options.pen;
+        let pattern = frame
+            .guess
+            .and_then(|g| g.images(rig, camera, &pen.led_offsets, pen.tip_offset))
+            .and_then(|px| label_by_pattern(&px, &frame.blobs, &self.options.pattern));
+        match (predicted, pattern) {
+            (Some(p), Some(q)) if agree(&p, &q) => q,
+            (None, Some(q)) => q,
+            (p, _) => p.unwrap_or_default(),
         }
-        ids
     }
 
     /// The images of the four LEDs in `camera` at `t` predicted by [`Self::predicted_leds`], or
@@ -536,6 +565,14 @@ impl TimeAlignment {
         near || blobs.all(|b| points.aligned_velocity.get(b).is_some_and(Option::is_some))
     }
 
+    /// The largest motion of one LED's blob over `dt` ns between two frames of a camera that
+    /// gives a velocity: [`AlignOptions::max_blob_motion_px`] per frame of a 60 Hz camera, for
+    /// frames further apart at that speed.
+    fn motion_limit_px(&self, dt: f64) -> f64 {
+        let per_60hz_frame = self.options.max_blob_motion_px;
+        per_60hz_frame.max(per_60hz_frame * dt / FRAME_60HZ_NS)
+    }
+
     /// True when the last two vision poses give the pen's velocity (not one pose alone).
     fn pen_velocity_known(&self) -> bool {
         matches!(
@@ -560,6 +597,43 @@ impl TimeAlignment {
         };
         Some(std::array::from_fn(|k| p1[k] + velocity(k) * dt))
     }
+}
+
+/// The blob nearest each predicted LED image, accepted only when it is unambiguous (within a
+/// third of the smallest predicted LED spacing, at most `max_spacing_px`, and alone there).
+fn nearest_identities(
+    px: &[[f64; 2]],
+    blobs: &[[f64; 2]],
+    max_spacing_px: f64,
+) -> [Option<usize>; LED_COUNT] {
+    let mut spacing = max_spacing_px;
+    for (a, pa) in px.iter().enumerate() {
+        for pb in &px[a + 1..] {
+            spacing = spacing.min((pa[0] - pb[0]).hypot(pa[1] - pb[1]));
+        }
+    }
+    let gate = spacing / 3.0;
+    let mut ids = [None; LED_COUNT];
+    for (id, p) in ids.iter_mut().zip(px) {
+        let mut near = blobs
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| (b[0] - p[0]).hypot(b[1] - p[1]) <= gate);
+        if let (Some((i, _)), None) = (near.next(), near.next()) {
+            *id = Some(i);
+        }
+    }
+    ids
+}
+
+/// True when two labellings give no LED two blobs and no blob two LEDs.
+fn agree(a: &[Option<usize>; LED_COUNT], b: &[Option<usize>; LED_COUNT]) -> bool {
+    (0..LED_COUNT).all(|k| {
+        (0..LED_COUNT).all(|j| match (a[k], b[j]) {
+            (Some(x), Some(y)) => (k == j) == (x == y),
+            _ => true,
+        })
+    })
 }
 
 /// One blob moved to a pair's time ([`TimeAlignment::alignment`]).
@@ -604,6 +678,10 @@ const MIN_VELOCITY_BASELINE_NS: u64 = 4_000_000;
 /// is the pair's own (a rolling shutter's rows still need moving), nanoseconds.
 const PREDICTION_STEP_NS: f64 = 10_000_000.0;
 
+/// A 60 Hz camera's frame period, nanoseconds: the period over which
+/// [`AlignOptions::max_blob_motion_px`] is the largest motion of an LED's blob.
+const FRAME_60HZ_NS: f64 = 1e9 / 60.0;
+
 /// Undistorts every blob into `out`, index for index.
 fn undistort_all(cam: &CameraModel, px: &[[f64; 2]], out: &mut Vec<[f64; 2]>) {
     out.clear();
@@ -619,6 +697,8 @@ fn undistort_all(cam: &CameraModel, px: &[[f64; 2]], out: &mut Vec<[f64; 2]>) {
 mod tests {
     use super::*;
     use crate::track::pen::PenGeometry;
+    use nalgebra::UnitQuaternion;
+    use std::f64::consts::PI;
 
     const OPTIONS: AlignOptions = AlignOptions {
         time_align: true,
@@ -759,6 +839,7 @@ mod tests {
         let guess = PenGuess {
             tip: Vector3::new(0.05, 0.0, 0.8),
             direction: Vector3::x(),
+            orientation: UnitQuaternion::identity(),
         };
         let frame = KeptFrame {
             blobs,
@@ -780,6 +861,7 @@ mod tests {
         let reversed = KeptFrame {
             guess: Some(PenGuess {
                 direction: -Vector3::x(),
+                orientation: UnitQuaternion::from_axis_angle(&Vector3::z_axis(), PI),
                 ..guess
             }),
             ..frame
@@ -788,6 +870,54 @@ mod tests {
             a.frame_identities(&rig, CameraId::Left, &reversed),
             [None; LED_COUNT]
         );
+    }
+
+    /// A pen turning about its resting tip, at 1 rad/s and from 50 ms on at 4 rad/s, seen at
+    /// 30 Hz: its blobs' image motion is no constant velocity or acceleration, but the gyro says
+    /// how it turned, and with the frame's guess of the pen the blobs are moved to the pair's
+    /// time exactly; without the guess they miss by pixels.
+    #[test]
+    fn a_turning_pens_blobs_are_moved_with_the_gyro() {
+        let rig = rig();
+        let rate = |t: u64| if t < 50_000_000 { 1.0 } else { 4.0 };
+        let tip = Vector3::new(0.05, 0.02, 0.8);
+        let offsets = OPTIONS.pen.led_offsets;
+        let orientation = |t: u64| {
+            let s = t as f64 * 1e-9;
+            let angle = 0.4 + s.min(0.05) + 4.0 * (s - 0.05).max(0.0);
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), angle)
+        };
+        let images = |t: u64| -> Vec<[f64; 2]> {
+            let d = orientation(t) * Vector3::x();
+            offsets
+                .iter()
+                .map(|l| rig.project(CameraId::Right, &(tip - d * *l)).unwrap())
+                .collect()
+        };
+        let labels = [Some(0), Some(1), Some(2), Some(3)];
+        let run = |guessed: bool| {
+            let mut a = TimeAlignment::new(OPTIONS);
+            for k in 0..=24 {
+                a.push_gyro(k * 5_000_000, Vector3::new(0.0, 0.0, rate(k * 5_000_000)));
+            }
+            for t in [10_000_000u64, 43_000_000, 76_000_000] {
+                a.push(1, t, images(t), Vec::new());
+                a.label(1, labels, [None; LED_COUNT]);
+                let guess = PenGuess {
+                    tip,
+                    direction: orientation(t) * Vector3::x(),
+                    orientation: orientation(t),
+                };
+                a.set_guess(1, guessed.then_some(guess));
+            }
+            let want = images(100_000_000);
+            a.alignment(&rig, 1, 100_000_000)
+                .iter()
+                .map(|m| (m.moved[0] - want[m.blob][0]).hypot(m.moved[1] - want[m.blob][1]))
+                .fold(0.0, f64::max)
+        };
+        assert!(run(true) < 1e-6, "{}", run(true));
+        assert!(run(false) > 1.0, "{}", run(false));
     }
 
     /// Blobs moving at constant image velocity are moved exactly to the target time, using the

@@ -89,7 +89,9 @@ pub struct TrackerConfig {
     pub clock_window: usize,
     /// Required precision of one clock-offset update, nanoseconds (else the window is discarded).
     pub clock_precision_ns: f64,
-    /// Largest image motion between consecutive frames of one camera used for velocity, pixels.
+    /// Largest image motion between consecutive frames of one camera used for velocity, pixels,
+    /// per 60 Hz frame period (frames further apart may be that many pixels per period apart:
+    /// a 15 Hz camera's blobs of a quickly drawn stroke move 50-60 px between frames).
     pub max_blob_motion_px: f64,
     /// Previous labels serve as a prior for this long, nanoseconds.
     pub continuity_ns: u64,
