@@ -42,6 +42,7 @@ mod pen_line;
 #[cfg(test)]
 mod pen_line_tests;
 mod pen_mono;
+mod pen_motion;
 mod pen_ray;
 mod pixel_noise;
 mod prior;
@@ -308,6 +309,7 @@ impl Tracker {
         ) {
             let linear = q * self.tip_specific_force(sample) - world.up() * world.gravity;
             self.tip_filter.push_accel(sample.t_ns, linear);
+            self.align.push_accel(sample.t_ns, linear);
             self.tip_accel = Some((sample.t_ns, linear));
         }
         self.last_gyro = Some((sample.t_ns, Vector3::from(sample.gyro)));

@@ -194,64 +194,6 @@ fn inliers(
     Some((labels, n, residual))
 }
 
-/// The gyro's last samples, for how the pen turned between two recent instants: integrated
-/// from the rates alone, with none of the orientation filter's corrections (a vision update
-/// between two frames turns the filter's direction by a fraction of a degree, which on the
-/// pen's 0.16 m lever is as large as the motion being predicted at 60 Hz).
-#[derive(Debug, Clone, Default)]
-pub(super) struct GyroHistory {
-    samples: std::collections::VecDeque<(u64, Vector3<f64>)>,
-}
-
-impl GyroHistory {
-    /// Keeps a sample (pen frame, rad/s) and drops those older than [`GYRO_HISTORY_NS`].
-    pub(super) fn push(&mut self, t_ns: u64, rate: Vector3<f64>) {
-        if !rate.iter().all(|v| v.is_finite()) {
-            return;
-        }
-        if self.samples.back().is_some_and(|&(t, _)| t >= t_ns) {
-            return;
-        }
-        self.samples.push_back((t_ns, rate));
-        while self
-            .samples
-            .front()
-            .is_some_and(|&(t, _)| t_ns - t > GYRO_HISTORY_NS)
-        {
-            self.samples.pop_front();
-        }
-    }
-
-    /// The pen-frame rotation from `t0` to `t1` (ns): `q(t1) = q(t0) · R`, each sample's rate
-    /// held until the next (the last's onwards, the first's before it); None without samples.
-    pub(super) fn rotation(&self, t0: f64, t1: f64) -> Option<UnitQuaternion<f64>> {
-        if t1 < t0 {
-            return self.rotation(t1, t0).map(|r| r.inverse());
-        }
-        let n = self.samples.len();
-        if n == 0 {
-            return None;
-        }
-        let mut r = UnitQuaternion::identity();
-        for (i, &(t, w)) in self.samples.iter().enumerate() {
-            let start = if i == 0 { f64::NEG_INFINITY } else { t as f64 };
-            let end = self
-                .samples
-                .get(i + 1)
-                .map_or(f64::INFINITY, |&(tn, _)| tn as f64);
-            let (a, b) = (start.max(t0), end.min(t1));
-            if b > a {
-                r *= UnitQuaternion::from_scaled_axis(w * ((b - a) * 1e-9));
-            }
-        }
-        Some(r)
-    }
-}
-
-/// How long the gyro's samples are kept, nanoseconds: the three frames of a 15 Hz camera and the
-/// pair's time after them.
-const GYRO_HISTORY_NS: u64 = 300_000_000;
-
 fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
     [a[0] - b[0], a[1] - b[1]]
 }
@@ -265,27 +207,6 @@ mod tests {
         let offsets = [0.0, 70.0, 110.0, 160.0];
         let (s, c) = angle.sin_cos();
         offsets.map(|l| [origin[0] + c * l * px_per_mm, origin[1] + s * l * px_per_mm])
-    }
-
-    #[test]
-    fn the_gyro_history_integrates_the_rates_both_ways() {
-        let mut g = GyroHistory::default();
-        assert!(g.rotation(0.0, 1e7).is_none());
-        // 1 rad/s about z for 50 ms, then 2 rad/s about x.
-        for k in 0..10u64 {
-            g.push(k * 5_000_000, Vector3::new(0.0, 0.0, 1.0));
-        }
-        for k in 10..20u64 {
-            g.push(k * 5_000_000, Vector3::new(2.0, 0.0, 0.0));
-        }
-        let r = g.rotation(20e6, 70e6).unwrap();
-        let want = UnitQuaternion::from_scaled_axis(Vector3::new(0.0, 0.0, 0.03))
-            * UnitQuaternion::from_scaled_axis(Vector3::new(0.04, 0.0, 0.0));
-        assert!(r.angle_to(&want) < 1e-12);
-        assert!(g.rotation(70e6, 20e6).unwrap().angle_to(&want.inverse()) < 1e-12);
-        // Past the last sample its rate carries on.
-        let after = g.rotation(95e6, 105e6).unwrap();
-        assert!((after.scaled_axis() - Vector3::new(0.02, 0.0, 0.0)).norm() < 1e-12);
     }
 
     #[test]
