@@ -54,7 +54,11 @@ impl GyroHistory {
             return None;
         }
         let mut r = UnitQuaternion::identity();
-        for (i, &(t, w)) in self.samples.iter().enumerate() {
+        let from = first_segment(&self.samples, t0);
+        for (i, &(t, w)) in self.samples.iter().enumerate().skip(from) {
+            if t as f64 >= t1 && i > from {
+                break;
+            }
             let start = if i == 0 { f64::NEG_INFINITY } else { t as f64 };
             let end = self
                 .samples
@@ -146,7 +150,11 @@ impl AccelHistory {
             return None;
         }
         let mut sum = Vector3::zeros();
-        for (i, &(t, a)) in self.samples.iter().enumerate() {
+        let from = first_segment(&self.samples, lo);
+        for (i, &(t, a)) in self.samples.iter().enumerate().skip(from) {
+            if t as f64 >= hi && i > from {
+                break;
+            }
             let next = self
                 .samples
                 .get(i + 1)
@@ -160,6 +168,14 @@ impl AccelHistory {
         }
         Some(sum)
     }
+}
+
+/// The index of the sample whose held value covers `t` (ns): the last one at or before it, or
+/// the first.
+fn first_segment(samples: &VecDeque<(u64, Vector3<f64>)>, t: f64) -> usize {
+    samples
+        .partition_point(|&(ts, _)| ts as f64 <= t)
+        .saturating_sub(1)
 }
 
 /// How long the last acceleration sample is held past its time to cover a move, nanoseconds
