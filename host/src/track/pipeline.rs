@@ -13,7 +13,8 @@
 //! 4. *Identification* ([`super::identify`]) with the fused direction and the previous labels as
 //!    priors (`pipeline/prior.rs`); a pair refused with two LED spots merged in one camera can
 //!    still be labelled from the other camera and the pen's rigid line (`pipeline/merged.rs`), and
-//!    one refused as ambiguous by both frames' own LED identities (`pipeline/frame_labels.rs`).
+//!    one refused as ambiguous or by a strayed fused direction by both frames' own LED identities
+//!    (`pipeline/frame_labels.rs`).
 //! 5. *Safety*: the tracker's own checks of the labelling, on the labelled pen's eq. 4.13 model
 //!    along the vision axis (`pipeline/safety.rs`); the first pair after a loss whose frames are
 //!    far apart in time keeps its labels but gives no tip (its blobs could not be moved).

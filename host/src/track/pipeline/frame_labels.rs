@@ -1,4 +1,5 @@
-//! A labelling from the two frames' own LED identities, for pairs the identifier found ambiguous.
+//! A labelling from the two frames' own LED identities, for pairs the identifier found ambiguous
+//! or at odds with a fused direction that has strayed.
 //!
 //! The identifier labels a pair from its stereo points alone, with the fused direction and the
 //! last labels as priors. After a loss longer than a second it has neither: the direction prior
@@ -6,6 +7,10 @@
 //! are refused as the scaled twin of another triple (LEDs 2-4 at 40:50 mm look like LEDs 1, 2 and
 //! 4 at 70:90 scaled by 1.78), or as a labelling that holds mirrored too (fires-v2 seed 4: a
 //! whole stroke of well aligned pairs refused as twins after a 1.2 s loss in the pen-up move).
+//! And on the 6 cm Minoru baseline the vision axes that correct the orientation filter are a few
+//! degrees off themselves, so the filter can stray by more than the prior's 2 degrees: fires-v2
+//! seed 5 drew the last 0.45 s of a stroke with all four LEDs plain in both cameras, every pair
+//! refused for disagreeing with a fused direction 7 degrees off the pen.
 //!
 //! Each camera's frames may still know their LEDs: from the prediction of a recent vision pose,
 //! or from the pen's pattern placed along the inertial direction where vision last saw it, up to
@@ -22,7 +27,7 @@ use crate::track::pen::LED_COUNT;
 
 impl Tracker {
     /// The labelling both frames' LED identities give a pair the identifier refused as
-    /// ambiguous (see the module doc), or None.
+    /// ambiguous or for the fused direction (see the module doc), or None.
     pub(super) fn complete_from_frame_labels(
         &self,
         refused_by: RefusedBy,
@@ -30,6 +35,7 @@ impl Tracker {
         if !matches!(
             refused_by,
             RefusedBy::Twin
+                | RefusedBy::DirectionPrior
                 | RefusedBy::Mirror
                 | RefusedBy::NoPrior
                 | RefusedBy::SeveralAgree
