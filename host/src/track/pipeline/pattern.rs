@@ -23,8 +23,10 @@
 //! The spacings' differences (70, 40, 50, 110, 90, 160 mm) are all distinct, so no shift along the
 //! pen maps two LEDs onto two others; the scale bound excludes the scaled twins (LEDs 2-4 at
 //! 40:50 are LEDs 1, 2 and 4 at 70:90 scaled by 1.78), and the direction's sign the mirror image.
-//! The labels only give the camera's image velocities: the stereo pair they align is still
-//! identified and checked as every other.
+//! The labels give the camera's image velocities, and the stereo pair they align is identified
+//! as every other; only a pair the identifier refuses as ambiguous (or for a strayed fused
+//! direction) is labelled by both frames' labels (`pipeline/frame_labels.rs`), and the labelling
+//! safety checks it as every other.
 
 use nalgebra::{UnitQuaternion, Vector3};
 
