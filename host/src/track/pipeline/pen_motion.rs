@@ -15,32 +15,71 @@ use std::collections::VecDeque;
 /// pair's time after them.
 const HISTORY_NS: u64 = 300_000_000;
 
+/// The last [`HISTORY_NS`] of one IMU quantity, each sample's value held until the next.
+#[derive(Debug, Clone, Default)]
+struct Samples(VecDeque<(u64, Vector3<f64>)>);
+
+impl Samples {
+    /// Keeps a finite sample newer than the last and drops those older than [`HISTORY_NS`].
+    fn push(&mut self, t_ns: u64, value: Vector3<f64>) {
+        if !value.iter().all(|v| v.is_finite()) || self.0.back().is_some_and(|&(t, _)| t >= t_ns) {
+            return;
+        }
+        self.0.push_back((t_ns, value));
+        while self.0.front().is_some_and(|&(t, _)| t_ns - t > HISTORY_NS) {
+            self.0.pop_front();
+        }
+    }
+
+    /// True when the samples reach back to `lo` and, held [`MAX_HOLD_NS`] past the last, on to
+    /// `hi` (ns).
+    fn covers(&self, lo: f64, hi: f64) -> bool {
+        match (self.0.front(), self.0.back()) {
+            (Some(&(first, _)), Some(&(last, _))) => {
+                first as f64 <= lo && last as f64 >= hi - MAX_HOLD_NS
+            }
+            _ => false,
+        }
+    }
+
+    /// Each sample's value with the part of `[lo, hi]` (ns) over which it is held (the first's
+    /// from before it, the last's onwards), in time order; pieces of zero length are skipped.
+    fn held(&self, lo: f64, hi: f64) -> impl Iterator<Item = (f64, f64, Vector3<f64>)> + '_ {
+        // The sample whose held value covers `lo`: the last one at or before it, or the first.
+        let from = self
+            .0
+            .partition_point(|&(t, _)| t as f64 <= lo)
+            .saturating_sub(1);
+        self.0
+            .iter()
+            .enumerate()
+            .skip(from)
+            .take_while(move |&(i, &(t, _))| i == from || (t as f64) < hi)
+            .filter_map(move |(i, &(t, v))| {
+                let start = if i == 0 { f64::NEG_INFINITY } else { t as f64 };
+                let end = self
+                    .0
+                    .get(i + 1)
+                    .map_or(f64::INFINITY, |&(tn, _)| tn as f64);
+                let (a, b) = (start.max(lo), end.min(hi));
+                (b > a).then_some((a, b, v))
+            })
+    }
+}
+
 /// The gyro's last samples, for how the pen turned between two recent instants: integrated
 /// from the rates alone, with none of the orientation filter's corrections (a vision update
 /// between two frames turns the filter's direction by a fraction of a degree, which on the
 /// pen's 0.16 m lever is as large as the motion being predicted at 60 Hz).
 #[derive(Debug, Clone, Default)]
 pub(super) struct GyroHistory {
-    samples: std::collections::VecDeque<(u64, Vector3<f64>)>,
+    samples: Samples,
 }
 
 impl GyroHistory {
     /// Keeps a sample (pen frame, rad/s) and drops those older than [`HISTORY_NS`].
     pub(super) fn push(&mut self, t_ns: u64, rate: Vector3<f64>) {
-        if !rate.iter().all(|v| v.is_finite()) {
-            return;
-        }
-        if self.samples.back().is_some_and(|&(t, _)| t >= t_ns) {
-            return;
-        }
-        self.samples.push_back((t_ns, rate));
-        while self
-            .samples
-            .front()
-            .is_some_and(|&(t, _)| t_ns - t > HISTORY_NS)
-        {
-            self.samples.pop_front();
-        }
+        self.samples.push(t_ns, rate);
     }
 
     /// The pen-frame rotation from `t0` to `t1` (ns): `q(t1) = q(t0) · R`, each sample's rate
@@ -49,27 +88,16 @@ impl GyroHistory {
         if t1 < t0 {
             return self.rotation(t1, t0).map(|r| r.inverse());
         }
-        let n = self.samples.len();
-        if n == 0 {
+        if self.samples.0.is_empty() {
             return None;
         }
-        let mut r = UnitQuaternion::identity();
-        let from = first_segment(&self.samples, t0);
-        for (i, &(t, w)) in self.samples.iter().enumerate().skip(from) {
-            if t as f64 >= t1 && i > from {
-                break;
-            }
-            let start = if i == 0 { f64::NEG_INFINITY } else { t as f64 };
-            let end = self
-                .samples
-                .get(i + 1)
-                .map_or(f64::INFINITY, |&(tn, _)| tn as f64);
-            let (a, b) = (start.max(t0), end.min(t1));
-            if b > a {
-                r *= UnitQuaternion::from_scaled_axis(w * ((b - a) * 1e-9));
-            }
-        }
-        Some(r)
+        Some(
+            self.samples
+                .held(t0, t1)
+                .fold(UnitQuaternion::identity(), |r, (a, b, w)| {
+                    r * UnitQuaternion::from_scaled_axis(w * ((b - a) * 1e-9))
+                }),
+        )
     }
 }
 
@@ -77,25 +105,13 @@ impl GyroHistory {
 /// `Tracker::tip_acceleration`), each held until the next.
 #[derive(Debug, Clone, Default)]
 pub(super) struct AccelHistory {
-    samples: VecDeque<(u64, Vector3<f64>)>,
+    samples: Samples,
 }
 
 impl AccelHistory {
     /// Keeps a sample (world frame, m/s²) and drops those older than [`HISTORY_NS`].
     pub(super) fn push(&mut self, t_ns: u64, accel: Vector3<f64>) {
-        if !accel.iter().all(|v| v.is_finite())
-            || self.samples.back().is_some_and(|&(t, _)| t >= t_ns)
-        {
-            return;
-        }
-        self.samples.push_back((t_ns, accel));
-        while self
-            .samples
-            .front()
-            .is_some_and(|&(t, _)| t_ns - t > HISTORY_NS)
-        {
-            self.samples.pop_front();
-        }
+        self.samples.push(t_ns, accel);
     }
 
     /// The displacement, metres, that the acceleration adds to moving a point from `t1` to
@@ -145,37 +161,20 @@ impl AccelHistory {
         split: f64,
         w: impl Fn(f64) -> f64,
     ) -> Option<Vector3<f64>> {
-        let (&(first, _), &(last, _)) = (self.samples.front()?, self.samples.back()?);
-        if (first as f64) > lo || (last as f64) < hi - MAX_HOLD_NS {
+        if !self.samples.covers(lo, hi) {
             return None;
         }
         let mut sum = Vector3::zeros();
-        let from = first_segment(&self.samples, lo);
-        for (i, &(t, a)) in self.samples.iter().enumerate().skip(from) {
-            if t as f64 >= hi && i > from {
-                break;
-            }
-            let next = self
-                .samples
-                .get(i + 1)
-                .map_or(f64::INFINITY, |&(tn, _)| tn as f64);
-            for (u0, u1) in [(t as f64, next.min(split)), ((t as f64).max(split), next)] {
-                let (u0, u1) = (u0.max(lo), u1.min(hi));
+        for (a, b, acc) in self.samples.held(lo, hi) {
+            // Split at `split`, where the weight changes form; each piece is linear.
+            for (u0, u1) in [(a, b.min(split)), (a.max(split), b)] {
                 if u1 > u0 {
-                    sum += a * ((u1 - u0) * w(0.5 * (u0 + u1)));
+                    sum += acc * ((u1 - u0) * w(0.5 * (u0 + u1)));
                 }
             }
         }
         Some(sum)
     }
-}
-
-/// The index of the sample whose held value covers `t` (ns): the last one at or before it, or
-/// the first.
-fn first_segment(samples: &VecDeque<(u64, Vector3<f64>)>, t: f64) -> usize {
-    samples
-        .partition_point(|&(ts, _)| ts as f64 <= t)
-        .saturating_sub(1)
 }
 
 /// How long the last acceleration sample is held past its time to cover a move, nanoseconds
