@@ -544,15 +544,10 @@ impl Tracker {
         if t.abs_diff(tv) > PATTERN_GUESS_MAX_AGE_NS {
             return None;
         }
-        // The inertial direction itself, not the identification prior (which times out a second
-        // into a loss): the pattern's turn bound refuses a direction that has drifted.
-        let direction = self.direction.direction_at(t)?;
+        // The inertial orientation itself, not the identification prior (which times out a
+        // second into a loss): the pattern's turn bound refuses a direction that has drifted.
         let orientation = self.direction.orientation_at(t)?;
-        Some(pattern::PenGuess {
-            tip,
-            direction,
-            orientation,
-        })
+        Some(pattern::PenGuess { tip, orientation })
     }
 
     /// Keeps a labelled frame for the next frames ([`LabelGuard::remember`]).

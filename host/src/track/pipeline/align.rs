@@ -240,7 +240,7 @@ impl TimeAlignment {
         let seen = dv / (0.5 * (frames.2 - frames.0) * 1e-9);
         let m = self.accel.move_part(t0, t1, s)? - seen * (0.5 * s * (t1 - t0 + s) * 1e-18);
         let pen = &self.options.pen;
-        let led = g.tip - g.direction * (pen.led_offsets[k] + pen.tip_offset);
+        let led = g.tip - g.direction() * (pen.led_offsets[k] + pen.tip_offset);
         let (a, b) = (
             rig.project(camera, &led).ok()?,
             rig.project(camera, &(led + m)).ok()?,

@@ -143,7 +143,6 @@ fn frames_after_a_loss_are_labelled_by_the_pens_pattern() {
     let blobs = vec![seen[3], [100.0, 700.0], seen[1], seen[2]];
     let guess = PenGuess {
         tip: Vector3::new(0.05, 0.0, 0.8),
-        direction: Vector3::x(),
         orientation: UnitQuaternion::identity(),
     };
     let frame = KeptFrame {
@@ -165,7 +164,6 @@ fn frames_after_a_loss_are_labelled_by_the_pens_pattern() {
     );
     let reversed = KeptFrame {
         guess: Some(PenGuess {
-            direction: -Vector3::x(),
             orientation: UnitQuaternion::from_axis_angle(&Vector3::z_axis(), PI),
             ..guess
         }),
@@ -220,7 +218,6 @@ fn a_pen_setting_off_is_moved_with_its_measured_acceleration() {
                 1,
                 Some(PenGuess {
                     tip: tip_at(0),
-                    direction: dir,
                     orientation: UnitQuaternion::rotation_between(&Vector3::x(), &dir)
                         .unwrap_or_else(UnitQuaternion::identity),
                 }),
@@ -270,7 +267,6 @@ fn a_turning_pens_blobs_are_moved_with_the_gyro() {
             a.label(1, labels, [None; LED_COUNT]);
             let guess = PenGuess {
                 tip,
-                direction: orientation(t) * Vector3::x(),
                 orientation: orientation(t),
             };
             a.set_guess(1, guessed.then_some(guess));

@@ -75,13 +75,16 @@ impl Default for PatternOptions {
 pub(super) struct PenGuess {
     /// Tip position, metres.
     pub(super) tip: Vector3<f64>,
-    /// Unit pen direction towards the tip.
-    pub(super) direction: Vector3<f64>,
-    /// The pen's orientation (world from pen; its x axis is `direction`).
+    /// The pen's orientation (world from pen; its x axis points towards the tip).
     pub(super) orientation: UnitQuaternion<f64>,
 }
 
 impl PenGuess {
+    /// Unit pen direction towards the tip.
+    pub(super) fn direction(&self) -> Vector3<f64> {
+        self.orientation * Vector3::x()
+    }
+
     /// The LEDs' images in `camera` with the pen's axial LED offsets and tip offset (LED `k` lies
     /// `offsets[k] + tip_offset` behind the tip), or None when one does not project.
     pub(super) fn images(
@@ -91,9 +94,9 @@ impl PenGuess {
         offsets: &[f64; LED_COUNT],
         tip_offset: f64,
     ) -> Option<[[f64; 2]; LED_COUNT]> {
-        let mut out = [[0.0; 2]; LED_COUNT];
+        let (mut out, direction) = ([[0.0; 2]; LED_COUNT], self.direction());
         for (o, &l) in out.iter_mut().zip(offsets) {
-            let p = self.tip - self.direction * (l + tip_offset);
+            let p = self.tip - direction * (l + tip_offset);
             *o = rig.project(camera, &p).ok()?;
         }
         Some(out)
