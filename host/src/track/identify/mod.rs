@@ -297,22 +297,44 @@ impl Identifier {
     }
 
     fn finish(&self, cands: &[Candidate], h: Hypothesis, resolution: Resolution) -> Identification {
-        let used: Vec<&Candidate> = h.assignment.iter().flatten().map(|&k| &cands[k]).collect();
+        Identification::graded(
+            cands,
+            h.assignment,
+            h.distance_rms,
+            resolution,
+            self.config.tolerance,
+        )
+    }
+}
+
+impl Identification {
+    /// The labelling `assignment` of `cands`, decided by `resolution`, graded as the identifier
+    /// grades its own: the candidates sharing no blob with it are interference, and the
+    /// confidence falls with the distance mismatch over the identification `tolerance` (metres),
+    /// grows with the LED count, and is discounted for a prior's decision.
+    pub(crate) fn graded(
+        cands: &[Candidate],
+        assignment: [Option<usize>; LED_COUNT],
+        distance_rms: f64,
+        resolution: Resolution,
+        tolerance: f64,
+    ) -> Self {
+        let used: Vec<&Candidate> = assignment.iter().flatten().map(|&k| &cands[k]).collect();
         let interference = cands
             .iter()
             .filter(|c| !used.iter().any(|u| shares_blob(u, c)))
             .count();
-        let fit = (-(h.distance_rms / self.config.tolerance).powi(2)).exp();
-        let coverage = (h.size as f64 / LED_COUNT as f64).sqrt();
+        let fit = (-(distance_rms / tolerance).powi(2)).exp();
+        let coverage = (used.len() as f64 / LED_COUNT as f64).sqrt();
         let penalty = if resolution == Resolution::Prior {
             0.8
         } else {
             1.0
         };
         Identification {
-            assignment: h.assignment,
-            points: labelled_points(cands, &h.assignment),
-            distance_rms: h.distance_rms,
+            assignment,
+            points: labelled_points(cands, &assignment),
+            distance_rms,
             confidence: fit * coverage * penalty,
             resolution,
             interference,

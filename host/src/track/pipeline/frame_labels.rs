@@ -95,25 +95,14 @@ pub(super) fn labelling_from_identities(
         }
     }
     let distance_rms = (sum / n as f64).sqrt();
-    let used: Vec<&Candidate> = assignment.iter().flatten().map(|&c| &cands[c]).collect();
-    let interference = cands
-        .iter()
-        .filter(|c| !used.iter().any(|u| u.left == c.left || u.right == c.right))
-        .count();
-    let fit = (-(distance_rms / tolerance).powi(2)).exp();
-    let coverage = (labelled.len() as f64 / LED_COUNT as f64).sqrt();
-    Some(Identification {
+    // Decided by the frames' identities: a prior.
+    Some(Identification::graded(
+        cands,
         assignment,
-        points: assignment.map(|a| a.map(|c| cands[c].point)),
         distance_rms,
-        // Decided by the frames' identities, a prior: the identifier's discount for those.
-        confidence: fit * coverage * 0.8,
-        resolution: Resolution::Prior,
-        interference,
-        completed: 0,
-        from_pen_line: false,
-        from_pen_ray: None,
-    })
+        Resolution::Prior,
+        tolerance,
+    ))
 }
 
 #[cfg(test)]
