@@ -673,4 +673,4 @@ fn undistort_all(cam: &CameraModel, px: &[[f64; 2]], out: &mut Vec<[f64; 2]>) {
 mod identities;
 #[cfg(test)]
 #[path = "align_tests.rs"]
-mod tests;
+pub(super) mod tests;

@@ -5,7 +5,9 @@ use crate::track::pen::PenGeometry;
 use nalgebra::UnitQuaternion;
 use std::f64::consts::PI;
 
-const OPTIONS: AlignOptions = AlignOptions {
+/// The alignment options of the tests: time alignment on, a global shutter, no centre noise,
+/// the thesis pen.
+pub(in crate::track::pipeline) const OPTIONS: AlignOptions = AlignOptions {
     time_align: true,
     continuity_ns: 100_000_000,
     max_blob_motion_px: 40.0,

@@ -351,15 +351,7 @@ mod tests {
             let rig = rig();
             let mut align = TimeAlignment::new(AlignOptions {
                 time_align: false,
-                continuity_ns: 100_000_000,
-                max_blob_motion_px: 40.0,
-                row_time_ns: [0.0; 2],
-                pixel_sigma: 0.0,
-                pen: PenGeometry {
-                    led_offsets: [0.0, 0.070, 0.110, 0.160],
-                    tip_offset: 0.0,
-                },
-                pattern: crate::track::pipeline::pattern::PatternOptions::DEFAULT,
+                ..super::super::align::tests::OPTIONS
             });
             for (cam, camera) in [CameraId::Left, CameraId::Right].into_iter().enumerate() {
                 let blobs = leds
