@@ -320,7 +320,11 @@ fn unique_plane(
             // About a compact blob's ray (the pen pointing at the crowded camera, or one LED's
             // own spot), not where two spots give the plane.
             if options.own_spots != Some(2) {
-                for n in (0..norm_c.len()).filter(|&n| streaks[n].is_none()) {
+                // A lone streak whose axis plane labels nothing is scanned too: its axis may be
+                // the exposure's smear more than the pen (the pen swinging through a camera's
+                // view), while its centroid still lies on the pen's image line.
+                let lone_streak = norm_c.len() == 1 && all.is_empty();
+                for n in (0..norm_c.len()).filter(|&n| streaks[n].is_none() || lone_streak) {
                     let found =
                         ray_labellings(pair, options, crowded, n, *set_k, direction).ok()?;
                     // One own spot images its LED alone: the fit takes it as that LED's.

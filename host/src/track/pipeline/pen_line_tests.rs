@@ -300,6 +300,55 @@ fn a_streak_of_merged_spots_gives_the_pen_line() {
     }
 }
 
+/// A pen pointing nearly at the right camera and swinging, so that its crowded spots are
+/// smeared into one streak across the pen during the exposure (webcam seed 3's boundary
+/// stroke): the streak's axis plane labels nothing, and the planes about its centroid's ray,
+/// which still meets the pen, label the LEDs where they are.
+#[test]
+fn a_streak_smeared_across_the_pen_is_located_about_its_ray() {
+    let (rig, pen, _, _, _) = merged_spot_scene(T, 1);
+    let led1 = Vector3::new(0.125, 0.0, 0.9);
+    let to_camera = (Vector3::new(0.25, 0.0, 0.0) - led1).normalize();
+    let back = (to_camera + Vector3::y() * 1.5f64.to_radians().tan()).normalize();
+    let leds = pen.led_offsets.map(|l| led1 + back * l);
+    let right_px = right_pixels(&rig, &leds);
+    let n = LED_COUNT as f64;
+    let centre = right_px
+        .iter()
+        .fold([0.0, 0.0], |c, p| [c[0] + p[0] / n, c[1] + p[1] / n]);
+    let left_px: Vec<[f64; 2]> = leds
+        .iter()
+        .map(|p| rig.project(CameraId::Left, p).unwrap())
+        .collect();
+    let left = CameraFrame {
+        radii: vec![3.0; LED_COUNT],
+        ..CameraFrame::new(CameraId::Left, T, left_px)
+    };
+    // The smear: 28 px long (elongation 4), at right angles to the pen's image (which runs along y here).
+    let (a, b) = (right_px[0], right_px[LED_COUNT - 1]);
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let across = [centre[0] - dy, centre[1] + dx];
+    let right = CameraFrame {
+        radii: vec![6.0],
+        shapes: vec![streak_shape(centre, across, 64.0)],
+        ..CameraFrame::new(CameraId::Right, T, vec![centre])
+    };
+    let s = scene_of(rig, pen, leds, left, right);
+    let l = label(&s, &towards_tip(&s)).expect("a pen-line labelling");
+    assert_eq!(l.crowded, CameraId::Right);
+    for k in 0..LED_COUNT {
+        let led = l.leds[k].expect("LED seen by the left camera");
+        assert_eq!(
+            (led.clear_blob, led.crowded_blob),
+            (k, Some(0)),
+            "LED {}",
+            k + 1
+        );
+        let err = (led.point - s.leds[k]).norm();
+        assert!(err < 1e-6, "LED {} off by {err} m", k + 1);
+    }
+}
+
 /// The hand may hide an end LED from the crowded camera when the clear one sees it: LED 1
 /// hidden on the right, the left camera's four LEDs label the pen and LED 1 keeps its left spot
 /// only (no stereo pair). Hidden from both cameras, or an inner LED hidden, there is no
