@@ -603,6 +603,32 @@ fn two_spots_in_the_crowded_camera_and_three_in_the_clear_one_label_the_pen() {
     assert!(label(&inner, &towards_tip(&inner)).is_none());
 }
 
+/// Two spots in the crowded camera whose second would touch the image of the LED next to it:
+/// that spot may be the two LEDs merged rather than one LED's own with its neighbour hidden
+/// (webcam seed 17: LEDs 2 and 3 merged, taken for LED 2's own spot, 5.4 px off its image), so
+/// the two-spot labelling is refused; with spots small enough to stay apart it stands.
+#[test]
+fn a_spot_that_would_merge_with_a_hidden_neighbour_is_no_own_spot() {
+    let with_radius = |radius: f64| {
+        let (rig, pen, leds, mut left, _) = merged_spot_scene(T, 1);
+        left.blobs.truncate(3);
+        left.radii.truncate(3);
+        let px = right_pixels(&rig, &leds);
+        let right = CameraFrame {
+            radii: vec![radius; 2],
+            ..CameraFrame::new(CameraId::Right, T, vec![px[0], px[1]])
+        };
+        (scene_of(rig, pen, leds, left, right), px)
+    };
+    let (s, px) = with_radius(3.0);
+    let apart = (px[1][0] - px[2][0]).hypot(px[1][1] - px[2][1]);
+    assert!(apart > 2.0 * 1.2 * 3.0, "LEDs 2 and 3 {apart} px apart");
+    assert!(label(&s, &towards_tip(&s)).is_some());
+    // Spots this large would have merged LEDs 2 and 3 (but do not cover LED 3's image).
+    let (s, _) = with_radius(0.45 * apart);
+    assert!(label(&s, &towards_tip(&s)).is_none());
+}
+
 /// The back end of the pen too dim for the right camera but for LED 1, while the left camera
 /// sees LEDs 1-3 (webcam seeds 12 and 15 at a stroke's turn or start: one camera sees LEDs 1-3,
 /// the other LED 1 alone): point stereo has one candidate. Of the planes about the right spot's
