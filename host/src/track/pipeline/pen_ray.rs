@@ -11,6 +11,10 @@
 //! through that ray and the pen holds it. Such planes form a one-parameter family (the angle
 //! about the ray). Each plane meets the clear camera's LED rays at points along the pen; the
 //! plane that puts them at the pen's LED spacing (FIRES thesis, §4.1.2) is the pen's plane.
+//! A lone streak whose axis plane labels nothing is scanned the same way: when the pen swings
+//! through the camera's view during the exposure, the streak's axis is the smear's, while its
+//! centroid still lies on the pen's image line (webcam seed 3's boundary stroke: a 200.7 ms gap
+//! of such pairs, past what the IMU bridges, closed).
 //!
 //! The family is scanned in [`SCAN_STEPS`] steps over half a turn, each plane labelled by
 //! [`super::pen_line`]'s own checks (spacing within tolerance, both images explained, the fused
