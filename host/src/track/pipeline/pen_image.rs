@@ -111,7 +111,9 @@ fn clear_image_explained(
 /// missing either way). The LEDs it does not image form a run at one end of the pen: the hand
 /// holding the pen covers its tip end, and the LEDs' emission cones fade towards the back end
 /// first (webcam seeds 6, 8 and 9 at a stroke's start: one camera sees LEDs 1-3, the other
-/// LEDs 1-2, the rest too dim). None when the image is not explained so.
+/// LEDs 1-2, the rest too dim). With own spots, no LED it does not image may lie within merging
+/// distance of an imaged one ([`MERGE_MARGIN`]): that spot could be both. None when the image is
+/// not explained so.
 fn crowded_image_explained(
     pair: &PairView<'_>,
     options: &LineOptions,
