@@ -300,12 +300,15 @@ fn a_streak_of_merged_spots_gives_the_pen_line() {
     }
 }
 
-/// A pen pointing nearly at the right camera and swinging, so that its crowded spots are
-/// smeared into one streak across the pen during the exposure (webcam seed 3's boundary
-/// stroke): the streak's axis plane labels nothing, and the planes about its centroid's ray,
-/// which still meets the pen, label the LEDs where they are.
-#[test]
-fn a_streak_smeared_across_the_pen_is_located_about_its_ray() {
+/// A pen pointing 1.5° off the right camera's centre: the rig, the pen, its LEDs, their right
+/// pixels and the mean of those (the merged blob's centroid).
+fn pen_at_the_right_camera() -> (
+    StereoRig,
+    PenGeometry,
+    [Vector3<f64>; LED_COUNT],
+    Vec<[f64; 2]>,
+    [f64; 2],
+) {
     let (rig, pen, _, _, _) = merged_spot_scene(T, 1);
     let led1 = Vector3::new(0.125, 0.0, 0.9);
     let to_camera = (Vector3::new(0.25, 0.0, 0.0) - led1).normalize();
@@ -316,6 +319,16 @@ fn a_streak_smeared_across_the_pen_is_located_about_its_ray() {
     let centre = right_px
         .iter()
         .fold([0.0, 0.0], |c, p| [c[0] + p[0] / n, c[1] + p[1] / n]);
+    (rig, pen, leds, right_px, centre)
+}
+
+/// A pen pointing nearly at the right camera and swinging, so that its crowded spots are
+/// smeared into one streak across the pen during the exposure (webcam seed 3's boundary
+/// stroke): the streak's axis plane labels nothing, and the planes about its centroid's ray,
+/// which still meets the pen, label the LEDs where they are.
+#[test]
+fn a_streak_smeared_across_the_pen_is_located_about_its_ray() {
+    let (rig, pen, leds, right_px, centre) = pen_at_the_right_camera();
     let left_px: Vec<[f64; 2]> = leds
         .iter()
         .map(|p| rig.project(CameraId::Left, p).unwrap())
@@ -421,16 +434,7 @@ fn a_led_covered_by_a_streak_is_not_given_a_nearer_spot() {
 /// (`pipeline/pen_ray.rs`) label LEDs 2-4, and the fit puts them where they are.
 #[test]
 fn a_pen_pointing_at_a_camera_is_located_about_its_blobs_ray() {
-    let (rig, pen, _, _, _) = merged_spot_scene(T, 1);
-    let led1 = Vector3::new(0.125, 0.0, 0.9);
-    let to_camera = (Vector3::new(0.25, 0.0, 0.0) - led1).normalize();
-    let back = (to_camera + Vector3::y() * 1.5f64.to_radians().tan()).normalize();
-    let leds = pen.led_offsets.map(|l| led1 + back * l);
-    let right_px = right_pixels(&rig, &leds);
-    let n = LED_COUNT as f64;
-    let centre = right_px
-        .iter()
-        .fold([0.0, 0.0], |c, p| [c[0] + p[0] / n, c[1] + p[1] / n]);
+    let (rig, pen, leds, right_px, centre) = pen_at_the_right_camera();
     let spread = right_px
         .iter()
         .map(|p| (p[0] - centre[0]).hypot(p[1] - centre[1]))
