@@ -300,15 +300,18 @@ fn a_streak_of_merged_spots_gives_the_pen_line() {
     }
 }
 
-/// A pen pointing 1.5° off the right camera's centre: the rig, the pen, its LEDs, their right
-/// pixels and the mean of those (the merged blob's centroid).
-fn pen_at_the_right_camera() -> (
+/// What [`pen_at_the_right_camera`] gives.
+type PenAtCamera = (
     StereoRig,
     PenGeometry,
     [Vector3<f64>; LED_COUNT],
     Vec<[f64; 2]>,
     [f64; 2],
-) {
+);
+
+/// A pen pointing 1.5° off the right camera's centre: the rig, the pen, its LEDs, their right
+/// pixels and the mean of those (the merged blob's centroid).
+fn pen_at_the_right_camera() -> PenAtCamera {
     let (rig, pen, _, _, _) = merged_spot_scene(T, 1);
     let led1 = Vector3::new(0.125, 0.0, 0.9);
     let to_camera = (Vector3::new(0.25, 0.0, 0.0) - led1).normalize();
