@@ -3,6 +3,7 @@
 //! (distance-threshold sampling, constrained weighted least-squares cubic B-spline, resampling).
 
 pub mod imu_bridge;
+pub mod imu_smooth;
 pub mod one_euro;
 pub mod postprocess;
 pub mod record;
@@ -10,6 +11,7 @@ pub mod segment;
 pub mod smooth;
 
 pub use imu_bridge::{imu_bridge, ImuBridgeOptions};
+pub use imu_smooth::{imu_smooth, ImuSmoothOptions};
 pub use one_euro::{OneEuroConfig, OneEuroFilter};
 pub use postprocess::{postprocess, BSpline, PostprocessConfig, StrokeError};
 pub use record::{stroke_record, StrokeRecordConfig};

@@ -5,6 +5,7 @@
 use fires_record::{StrokePiece, StrokePoint};
 
 use super::imu_bridge::{imu_bridge, ImuBridgeOptions};
+use super::imu_smooth::{imu_smooth, ImuSmoothOptions};
 use super::{postprocess, PostprocessConfig, Stroke, TimedAccel, TimedPoint};
 
 /// How a finished stroke becomes a record of the strokes file.
@@ -26,6 +27,9 @@ pub struct StrokeRecordConfig {
     pub imu_accel_error_mps2: f64,
     /// How the IMU bridges a gap.
     pub imu_bridge: ImuBridgeOptions,
+    /// How the stroke's tips are smoothed with the IMU before they are bridged and post-processed
+    /// ([`imu_smooth`]; None: the tips as tracked).
+    pub imu_smooth: Option<ImuSmoothOptions>,
 }
 
 impl Default for StrokeRecordConfig {
@@ -44,6 +48,7 @@ impl Default for StrokeRecordConfig {
             // What the bridge's fit leaves of the tip acceleration's error (docs/strokes.md).
             imu_accel_error_mps2: 0.2,
             imu_bridge: ImuBridgeOptions::default(),
+            imu_smooth: Some(ImuSmoothOptions::default()),
         }
     }
 }
@@ -101,7 +106,11 @@ pub fn stroke_record(
     stroke: &Stroke,
     config: &StrokeRecordConfig,
 ) -> fires_record::Stroke {
-    let pts = &stroke.points;
+    let smoothed = config
+        .imu_smooth
+        .as_ref()
+        .map(|o| smoothed_tips(&stroke.points, &stroke.accel, config.max_imu_gap_ns(), o));
+    let pts = smoothed.as_deref().unwrap_or(&stroke.points);
     let bridges: Vec<Option<Bridge>> = (0..pts.len().saturating_sub(1))
         .map(|i| config.bridge(pts, i, &stroke.accel))
         .collect();
@@ -148,6 +157,32 @@ pub fn stroke_record(
         _ => false,
     };
     record
+}
+
+/// The tips moved onto the IMU-smoothed path ([`imu_smooth`]), times and σ kept, run by run: runs
+/// part where two tips are further apart than `max_gap_ns`, the longest gap the IMU bridges (across
+/// a longer one the acceleration is not trusted to tie the two sides together). A run the smoother
+/// declines (too few tips, the IMU's samples not covering it) keeps its tips as tracked.
+fn smoothed_tips(
+    tips: &[TimedPoint],
+    accel: &[TimedAccel],
+    max_gap_ns: u64,
+    options: &ImuSmoothOptions,
+) -> Vec<TimedPoint> {
+    let mut out = Vec::with_capacity(tips.len());
+    let mut start = 0;
+    for i in 1..=tips.len() {
+        let split = i == tips.len() || tips[i].t_ns.saturating_sub(tips[i - 1].t_ns) > max_gap_ns;
+        if split {
+            let run = &tips[start..i];
+            match imu_smooth(run, accel, options) {
+                Some(path) => out.extend(run.iter().zip(path).map(|(t, p)| TimedPoint { p, ..*t })),
+                None => out.extend_from_slice(run),
+            }
+            start = i;
+        }
+    }
+    out
 }
 
 /// One piece: the post-processed polyline of raw samples tracked without a gap they could not bridge
