@@ -7,7 +7,9 @@
 //! triangulation, and the tip follows from eq. 4.13 (FIRES thesis §4.1.2) with the least-squares pen axis. The
 //! tips go through the same button segmentation and end-of-stroke post-processing as the tracker's, so the
 //! difference between `strokes_vs_truth` and `strokes_floor` is what identification, time alignment and
-//! fusion lose. Rolling-shutter row times are not modelled here.
+//! fusion lose. Rolling-shutter row times are not modelled here, and the floor's tips are not moved onto
+//! the IMU-smoothed path (`crate::stroke::imu_smooth`: the floor has no tracker, so no tip acceleration),
+//! so the tracked strokes, which are, can lie below it.
 
 use std::collections::HashMap;
 

@@ -95,7 +95,8 @@ enum Bridge {
 }
 
 /// The strokes-file record of `stroke`, with its stable `id` and the `buttons` held at pen-down. The raw
-/// samples are split into pieces where two consecutive ones are more than
+/// samples are first moved onto the IMU-smoothed path (with [`StrokeRecordConfig::imu_smooth`], run by run
+/// between gaps longer than [`StrokeRecordConfig::max_imu_gap_ns`]), then split into pieces where two consecutive ones are more than
 /// [`StrokeRecordConfig::max_gap_ns`] apart and the IMU cannot bridge them
 /// ([`StrokeRecordConfig::max_imu_gap_ns`]); each piece is post-processed on its own. Each output
 /// point gets the time at which the tip passed the same fraction of its piece's raw arc length, and
