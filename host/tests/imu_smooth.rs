@@ -191,6 +191,20 @@ fn too_little_to_work_with_is_declined() {
     assert!(imu_smooth(&tips, &holed, &options).is_none());
     // No IMU at all.
     assert!(imu_smooth(&tips, &[], &options).is_none());
+    // A 40-minute stroke (no pen-down lasts that long): more nodes than a path may have, declined.
+    let long: Vec<TimedPoint> = (0..16_000u64)
+        .map(|k| TimedPoint {
+            t_ns: T0 + k * 150 * MS,
+            ..tips[0]
+        })
+        .collect();
+    let steady: Vec<TimedAccel> = (0..240_100u64)
+        .map(|k| TimedAccel {
+            t_ns: T0 + k * 10 * MS,
+            a: [0.0; 3],
+        })
+        .collect();
+    assert!(imu_smooth(&long, &steady, &options).is_none());
     // Times out of order.
     let mut swapped = tips.clone();
     swapped.swap(3, 4);

@@ -69,6 +69,16 @@ impl Default for ImuSmoothOptions {
     }
 }
 
+/// Most nodes a path may have (half an hour of a 100 Hz grid); a longer stroke is left as tracked.
+const MAX_NODES: usize = 200_000;
+
+/// Most entries of the banded normal matrix a stroke may need (160 MB of f64); a longer or denser
+/// stroke is left as tracked.
+const MAX_BAND_ENTRIES: usize = 20_000_000;
+
+/// Most multiply-adds of its factorisation (about a second).
+const MAX_BAND_WORK: f64 = 2e9;
+
 /// Residuals beyond this many robust spreads are down-weighted (Huber's constant).
 pub const HUBER_K: f64 = 2.5;
 
@@ -85,6 +95,13 @@ pub fn imu_smooth(
     }
     let (t0, t1) = (tips.first()?.t_ns, tips.last()?.t_ns);
     if !covered(accel, t0, t1, options.max_sample_gap_ns) {
+        return None;
+    }
+    // The grid's size, bounded before it is built.
+    let nodes = tips
+        .len()
+        .saturating_add(((t1 - t0) / options.step_ns.max(1)) as usize);
+    if nodes > MAX_NODES {
         return None;
     }
     let grid = Grid::new(tips, options)?;
@@ -291,6 +308,11 @@ fn banded_least_squares(n: usize, rows: &[Row]) -> Option<Vec<f64>> {
             hi - lo
         })
         .max()?;
+    // A stroke of pathological density (external data) is declined rather than factored slowly.
+    if n.saturating_mul(bw + 1) > MAX_BAND_ENTRIES || n as f64 * (bw as f64).powi(2) > MAX_BAND_WORK
+    {
+        return None;
+    }
     let mut band = Band::new(n, bw);
     let mut rhs = vec![0.0; n];
     for (c, r, w) in rows {
