@@ -319,9 +319,11 @@ impl Tracker {
         if !self.occluded {
             return None;
         }
-        let q = self.direction.orientation_at(sample.t_ns);
         let direction = self.direction.direction_at(sample.t_ns);
-        Some(match self.reckoner.propagate(sample, q.as_ref()) {
+        // The tip's own acceleration (the lever from the accelerometer included): a pen turning
+        // as it stops moves its accelerometer, 12 cm behind the tip, differently from the tip.
+        let linear = self.tip_accel.map(|(_, a)| a);
+        Some(match self.reckoner.propagate_linear(sample.t_ns, linear) {
             Some(tip) => TrackSample {
                 tip: Some(tip.into()),
                 quality: TrackQuality::DeadReckoned,
