@@ -77,6 +77,16 @@ fn session(
     (tips, samples)
 }
 
+/// Gaussian noise of `sigma_m` per axis on every tip (seeded).
+fn add_noise(tips: &mut [TimedPoint], sigma_m: f64, seed: u64) {
+    let mut rng = SplitMix64::new(seed);
+    for t in tips {
+        for v in &mut t.p {
+            *v += sigma_m * rng.gaussian();
+        }
+    }
+}
+
 fn largest_error(tips: &[TimedPoint], path: fn(u64) -> [f64; 3], out: &[[f64; 3]]) -> f64 {
     tips.iter()
         .zip(out)
@@ -121,12 +131,7 @@ fn tips_noisier_than_their_sigma_are_smoothed_to_less_than_half() {
     // by a random walk that matches the tips' averaged noise over about 0.18 s, five tips at 30 Hz:
     // a gain of about √5.
     let (mut tips, accel) = session(33, 2000, 1e-4, circle, circle_accel, |_| [0.0; 3]);
-    let mut rng = SplitMix64::new(5);
-    for t in &mut tips {
-        for v in &mut t.p {
-            *v += 0.002 * rng.gaussian();
-        }
-    }
+    add_noise(&mut tips, 0.002, 5);
     let out = imu_smooth(&tips, &accel, &ImuSmoothOptions::default()).expect("smoothed");
     let raw = rms(tips.iter().map(|t| dist(&t.p, &circle(t.t_ns))));
     let smooth = rms(tips.iter().zip(&out).map(|(t, p)| dist(p, &circle(t.t_ns))));
@@ -153,12 +158,7 @@ fn a_flick_the_imu_got_wrong_does_not_move_good_tips() {
 #[test]
 fn a_translated_stroke_smooths_to_the_translated_path() {
     let (mut tips, accel) = session(33, 1500, 1e-4, circle, circle_accel, |_| [0.0; 3]);
-    let mut rng = SplitMix64::new(8);
-    for t in &mut tips {
-        for v in &mut t.p {
-            *v += 0.001 * rng.gaussian();
-        }
-    }
+    add_noise(&mut tips, 0.001, 8);
     let options = ImuSmoothOptions::default();
     let out = imu_smooth(&tips, &accel, &options).expect("smoothed");
     let shift = [0.3, -0.2, 0.1];
@@ -216,16 +216,12 @@ fn stroke_record_smooths_each_run_and_keeps_a_run_it_cannot_smooth() {
     // Noisy tips over 2 s, with a 400 ms gap (longer than the IMU bridges) after 1 s, and a short
     // run of 3 tips at the end, too few to smooth.
     let (tips, accel) = session(33, 2000, 1e-4, circle, circle_accel, |_| [0.0; 3]);
-    let mut rng = SplitMix64::new(21);
-    let tips: Vec<TimedPoint> = tips
+    let mut tips: Vec<TimedPoint> = tips
         .into_iter()
         .filter(|t| !(T0 + 1000 * MS..T0 + 1400 * MS).contains(&t.t_ns))
         .filter(|t| !(T0 + 1700 * MS..T0 + 1900 * MS).contains(&t.t_ns))
-        .map(|t| TimedPoint {
-            p: t.p.map(|v| v + 0.0015 * rng.gaussian()),
-            ..t
-        })
         .collect();
+    add_noise(&mut tips, 0.0015, 21);
     let stroke = Stroke {
         t_start_ns: T0,
         t_end_ns: T0 + 2100 * MS,

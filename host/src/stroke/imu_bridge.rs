@@ -13,6 +13,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use super::segment::{accel_at, samples_cover};
 use super::{TimedAccel, TimedPoint};
 
 /// How a gap is bridged with the IMU.
@@ -63,11 +64,7 @@ pub fn imu_bridge(
     let from = accel.partition_point(|s| s.t_ns <= t0);
     let to = accel.partition_point(|s| s.t_ns < t1);
     let inside = &accel[from..to];
-    let (first, last) = (inside.first()?, inside.last()?);
-    let covered = first.t_ns - t0 <= max_step
-        && t1 - last.t_ns <= max_step
-        && inside.windows(2).all(|w| w[1].t_ns - w[0].t_ns <= max_step);
-    if !covered {
+    if !samples_cover(inside, t0, t1, max_step) {
         return None;
     }
     // The fit's tips: the gap's ends and the tips within the window that the samples reach.
@@ -148,19 +145,6 @@ type Knot = (u64, Vector3<f64>, Vector3<f64>, Vector3<f64>);
 
 impl DoubleIntegral {
     fn new(accel: &[TimedAccel], start: u64, end: u64) -> Option<Self> {
-        let value_at = |t: u64| -> Option<Vector3<f64>> {
-            let i = accel.partition_point(|s| s.t_ns <= t);
-            let (before, after) = (i.checked_sub(1).map(|k| &accel[k]), accel.get(i));
-            Some(match (before, after) {
-                (Some(p), Some(q)) => {
-                    let w = (t - p.t_ns) as f64 / (q.t_ns - p.t_ns) as f64;
-                    Vector3::from(p.a) * (1.0 - w) + Vector3::from(q.a) * w
-                }
-                (Some(p), None) => Vector3::from(p.a),
-                (None, Some(q)) => Vector3::from(q.a),
-                (None, None) => return None,
-            })
-        };
         let mut times = vec![start];
         times.extend(
             accel
@@ -173,7 +157,7 @@ impl DoubleIntegral {
         let (mut v, mut x) = (Vector3::zeros(), Vector3::zeros());
         let mut prev: Option<(u64, Vector3<f64>)> = None;
         for t in times {
-            let a = value_at(t)?;
+            let a = Vector3::from(accel_at(accel, t)?);
             if let Some((tp, ap)) = prev {
                 let h = (t - tp) as f64 * 1e-9;
                 x += v * h + (ap / 3.0 + a / 6.0) * h * h;

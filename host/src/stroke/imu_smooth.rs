@@ -26,6 +26,7 @@
 //! normal equations are banded in time order and solved by a banded Cholesky factorisation, linear
 //! in the stroke's length.
 
+use super::segment::{accel_at, samples_cover};
 use super::{TimedAccel, TimedPoint};
 
 /// How a stroke's tips are smoothed with the IMU ([`imu_smooth`]).
@@ -94,7 +95,9 @@ pub fn imu_smooth(
         return None;
     }
     let (t0, t1) = (tips.first()?.t_ns, tips.last()?.t_ns);
-    if !covered(accel, t0, t1, options.max_sample_gap_ns) {
+    let inside =
+        &accel[accel.partition_point(|s| s.t_ns < t0)..accel.partition_point(|s| s.t_ns <= t1)];
+    if !samples_cover(inside, t0, t1, options.max_sample_gap_ns) {
         return None;
     }
     // The grid's size, bounded before it is built.
@@ -168,6 +171,9 @@ struct Grid {
     tip_node: Vec<usize>,
     /// Times of the acceleration-error knots, nanoseconds (at least two, at the ends).
     knots: Vec<u64>,
+    /// Each unknown's place in the banded system (node `k` is unknown `k`, knot `j` unknown
+    /// `nodes + j`).
+    pos: Vec<usize>,
 }
 
 impl Grid {
@@ -186,11 +192,25 @@ impl Grid {
         }
         let (t0, t1) = (tips.first()?.t_ns, tips.last()?.t_ns);
         let spans = ((t1 - t0).div_ceil(options.bias_knot_ns.max(1))).max(1);
-        let knots = (0..=spans).map(|j| t0 + (t1 - t0) * j / spans).collect();
+        let knots: Vec<u64> = (0..=spans).map(|j| t0 + (t1 - t0) * j / spans).collect();
+        // Unknowns in time order (node k, then knot j just before the first node after its time), so
+        // the normal matrix is banded.
+        let n_nodes = times.len();
+        let mut key: Vec<(f64, usize)> = (0..n_nodes).map(|k| (k as f64, k)).collect();
+        for (j, &t) in knots.iter().enumerate() {
+            let k = times.partition_point(|&x| x <= t);
+            key.push((k as f64 - 0.5 + j as f64 * 1e-6, n_nodes + j));
+        }
+        key.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let mut pos = vec![0; key.len()];
+        for (p, &(_, u)) in key.iter().enumerate() {
+            pos[u] = p;
+        }
         Some(Self {
             times,
             tip_node,
             knots,
+            pos,
         })
     }
 
@@ -216,16 +236,7 @@ impl Grid {
         let n_nodes = self.times.len();
         let n = n_nodes + self.knots.len();
         // Unknowns in time order: node k at position k, knot j just after the node at its time.
-        let mut key: Vec<(f64, usize)> = (0..n_nodes).map(|k| (k as f64, k)).collect();
-        for (j, &t) in self.knots.iter().enumerate() {
-            let k = self.times.partition_point(|&x| x <= t);
-            key.push((k as f64 - 0.5 + j as f64 * 1e-6, n_nodes + j));
-        }
-        key.sort_by(|x, y| x.0.total_cmp(&y.0));
-        let mut pos = vec![0; n];
-        for (p, &(_, u)) in key.iter().enumerate() {
-            pos[u] = p;
-        }
+        let pos = &self.pos;
         let mut rows: Vec<Row> = Vec::with_capacity(n + z.len());
         for (i, &k) in self.tip_node.iter().enumerate() {
             rows.push((vec![(pos[k], 1.0)], z[i], 1.0 / (sigma[i] * tip_scale[i])));
@@ -391,36 +402,6 @@ impl Band {
         }
         b
     }
-}
-
-/// True when the samples cover `[t0, t1]` with no two (nor an end and a sample) further apart than
-/// `max_gap`.
-fn covered(accel: &[TimedAccel], t0: u64, t1: u64, max_gap: u64) -> bool {
-    let from = accel.partition_point(|s| s.t_ns < t0);
-    let to = accel.partition_point(|s| s.t_ns <= t1);
-    let inside = &accel[from..to];
-    match (inside.first(), inside.last()) {
-        (Some(f), Some(l)) => {
-            f.t_ns - t0 <= max_gap
-                && t1 - l.t_ns <= max_gap
-                && inside.windows(2).all(|w| w[1].t_ns - w[0].t_ns <= max_gap)
-        }
-        _ => false,
-    }
-}
-
-/// The acceleration at `t`, linear between samples and held beyond the first and last.
-fn accel_at(accel: &[TimedAccel], t: u64) -> Option<[f64; 3]> {
-    let i = accel.partition_point(|s| s.t_ns <= t);
-    Some(match (i.checked_sub(1).map(|k| &accel[k]), accel.get(i)) {
-        (Some(p), Some(q)) => {
-            let w = (t - p.t_ns) as f64 / (q.t_ns - p.t_ns) as f64;
-            [0, 1, 2].map(|k| p.a[k] * (1.0 - w) + q.a[k] * w)
-        }
-        (Some(p), None) => p.a,
-        (None, Some(q)) => q.a,
-        (None, None) => return None,
-    })
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

@@ -25,6 +25,34 @@ pub struct TimedAccel {
     pub a: [f64; 3],
 }
 
+/// The acceleration at `t`, linear between samples (in time order) and held beyond the first and
+/// last; None without samples.
+pub(crate) fn accel_at(accel: &[TimedAccel], t: u64) -> Option<[f64; 3]> {
+    let i = accel.partition_point(|s| s.t_ns <= t);
+    Some(match (i.checked_sub(1).map(|k| &accel[k]), accel.get(i)) {
+        (Some(p), Some(q)) => {
+            let w = (t - p.t_ns) as f64 / (q.t_ns - p.t_ns) as f64;
+            [0, 1, 2].map(|k| p.a[k] * (1.0 - w) + q.a[k] * w)
+        }
+        (Some(p), None) => p.a,
+        (None, Some(q)) => q.a,
+        (None, None) => return None,
+    })
+}
+
+/// True when the samples `inside` `[t0, t1]` cover it: none further than `max_gap` from the next, nor
+/// the first from `t0` and the last from `t1` (false without samples).
+pub(crate) fn samples_cover(inside: &[TimedAccel], t0: u64, t1: u64, max_gap: u64) -> bool {
+    match (inside.first(), inside.last()) {
+        (Some(f), Some(l)) => {
+            f.t_ns.saturating_sub(t0) <= max_gap
+                && t1.saturating_sub(l.t_ns) <= max_gap
+                && inside.windows(2).all(|w| w[1].t_ns - w[0].t_ns <= max_gap)
+        }
+        _ => false,
+    }
+}
+
 /// A finished stroke.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Stroke {
