@@ -1,7 +1,9 @@
 //! Tip dead reckoning through short occlusions (integrating the pen acceleration
 //! from the last vision-based position, which the FIRES thesis, §4.1.4, suggests but does not implement).
 //!
-//! While the tip is seen, an alpha-beta filter keeps its velocity. When it is lost, the tip is
+//! While the tip is seen, its velocity comes from the tracker's Kalman tip filter
+//! ([`TipDeadReckoner::observe_with_velocity`]) or, standing alone, from an alpha-beta filter
+//! ([`TipDeadReckoner::observe`]). When it is lost, the tip is
 //! extrapolated with that velocity, decaying exponentially, plus (optionally) the world-frame
 //! linear acceleration `q a - g up` from the IMU. Drift is bounded by giving up after
 //! `max_duration_ns` (default 0.3 s): the output is then "no tip", never a stale one.
@@ -130,6 +132,39 @@ impl TipDeadReckoner {
         self.last_seen = *tip;
     }
 
+    /// A vision tip at `t_ns` with its velocity estimated elsewhere (the tracker's Kalman tip
+    /// filter, which weighs each tip by its noise): the position is the tip, the velocity taken as
+    /// given (clamped to the fastest speed believed), unless the tip is a jump from the prediction
+    /// (a re-acquisition), which restarts at rest.
+    pub fn observe_with_velocity(
+        &mut self,
+        t_ns: u64,
+        tip: &Vector3<f64>,
+        velocity: &Vector3<f64>,
+    ) {
+        if !tip.iter().all(|v| v.is_finite()) {
+            return;
+        }
+        let jumped = match self.position {
+            Some(p)
+                if t_ns > self.t_ns && t_ns - self.last_seen_ns < self.config.max_duration_ns =>
+            {
+                let dt = (t_ns - self.t_ns) as f64 * 1e-9;
+                (tip - (p + self.velocity * dt)).norm() > self.config.max_innovation_m
+            }
+            _ => true,
+        };
+        self.position = Some(*tip);
+        self.velocity = if jumped || !velocity.iter().all(|v| v.is_finite()) {
+            Vector3::zeros()
+        } else {
+            clamp_norm(*velocity, self.config.max_speed_mps)
+        };
+        self.t_ns = t_ns.max(self.t_ns);
+        self.last_seen_ns = self.t_ns;
+        self.last_seen = *tip;
+    }
+
     /// Advances through an occlusion with one IMU sample (world-from-pen orientation `q`);
     /// returns the dead-reckoned tip, or None once the time limit is exceeded. The sample's own
     /// acceleration is taken for the tip's (no lever arm); [`Self::propagate_linear`] takes the tip's.
@@ -237,6 +272,45 @@ mod tests {
         assert!(
             (r - q - Vector3::new(0.0, 0.002, 0.0)).norm() < 1e-9,
             "{r:?}"
+        );
+    }
+
+    #[test]
+    fn a_given_velocity_is_taken_clamped_and_a_jump_restarts_at_rest() {
+        let cfg = DeadReckonConfig {
+            velocity_decay: 0.0,
+            ..Default::default()
+        };
+        let mut dr = TipDeadReckoner::new(cfg, WorldReference::default());
+        let p0 = Vector3::new(0.1, 0.0, 0.5);
+        let v = Vector3::new(0.0, 0.1, 0.0);
+        dr.observe_with_velocity(0, &p0, &v);
+        // The first tip has nothing to be a jump from, so it starts at rest.
+        assert_eq!(dr.velocity, Vector3::zeros());
+        dr.observe_with_velocity(10_000_000, &(p0 + v * 0.01), &v);
+        assert_eq!(dr.velocity, v);
+        let p = dr
+            .propagate_linear(60_000_000, None)
+            .expect("within the limit");
+        assert!((p - (p0 + v * 0.06)).norm() < 1e-12, "{p:?}");
+        // Faster than a hand: clamped to the fastest speed believed.
+        let fast = Vector3::new(10.0, 0.0, 0.0);
+        dr.observe_with_velocity(70_000_000, &(p0 + v * 0.07), &fast);
+        assert!((dr.velocity.norm() - dr.config.max_speed_mps).abs() < 1e-12);
+        // A tip 1 m from the prediction is a re-acquisition, not motion.
+        dr.observe_with_velocity(80_000_000, &(p0 + Vector3::new(1.0, 0.0, 0.0)), &v);
+        assert_eq!(dr.velocity, Vector3::zeros());
+        // A non-finite velocity is no velocity; a non-finite tip is ignored.
+        dr.observe_with_velocity(
+            90_000_000,
+            &(p0 + Vector3::new(1.0, 0.0, 0.0)),
+            &Vector3::new(f64::NAN, 0.0, 0.0),
+        );
+        assert_eq!(dr.velocity, Vector3::zeros());
+        dr.observe_with_velocity(100_000_000, &Vector3::new(f64::NAN, 0.0, 0.0), &v);
+        assert_eq!(
+            dr.current(100_000_000),
+            Some(p0 + Vector3::new(1.0, 0.0, 0.0))
         );
     }
 
