@@ -253,6 +253,49 @@ fn strokes_begun_before_the_world_is_accepted_are_retracked() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A session without strokes before the world is accepted (the thesis's tip experiment) has its
+/// start re-tracked too: with the world the tip's axis is fused with the IMU's, so more of the
+/// early tips are within 2 mm; the samples after the second pass are the first pass's.
+#[test]
+fn the_start_of_a_session_without_early_strokes_is_retracked() {
+    use fires_host::replay::report::tip_errors;
+    let (dir, reader, out, _) = track("tip", 6.0, 1);
+    let first = replay(
+        &reader,
+        &ReplayConfig {
+            retrack_startup: false,
+            ..ReplayConfig::default()
+        },
+    )
+    .expect("replay");
+    let (accepted, _) = out.world_fit.expect("world accepted");
+    let truth = reader.exposure_truth().expect("truth").expect("simulated");
+    let within_2mm_before = |o: &ReplayOutput| {
+        let early: Vec<f64> = tip_errors(o, &truth)
+            .into_iter()
+            .filter(|(t, _)| *t < accepted)
+            .map(|(_, e)| e)
+            .collect();
+        assert!(early.len() > 100, "{} early tips", early.len());
+        early.iter().filter(|e| **e < 0.002).count() as f64 / early.len() as f64
+    };
+    let (before, after) = (within_2mm_before(&first), within_2mm_before(&out));
+    eprintln!(
+        "world accepted at {:.2} s; early tips within 2 mm: {before:.3} -> {after:.3}",
+        accepted as f64 * 1e-9
+    );
+    assert!(after > 0.95 && after > before + 0.05, "{before} -> {after}");
+    let late = |o: &ReplayOutput| -> Vec<(u64, Option<[f64; 3]>)> {
+        o.samples
+            .iter()
+            .filter(|s| s.t_ns > accepted + 1_000_000_000)
+            .map(|s| (s.t_ns, s.tip))
+            .collect()
+    };
+    assert_eq!(late(&out), late(&first));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A mode button held while drawing reaches the curve network (curve network issue, item 4): the simulator
 /// holds the sharp mode while it draws stroke 2, the link carries it in the status packets, the tracker
 /// keeps it as the stroke's buttons, and the network built from the tracked strokes tags exactly that

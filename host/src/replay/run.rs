@@ -249,20 +249,22 @@ pub fn replay(
         images,
     };
     let mut pass = track_pass(&input, &rig, tracker_cfg.clone(), None, &mut times)?;
-    // Strokes begun before the world estimate was accepted: once more with that world.
+    // The start before the world estimate was accepted, strokes begun there included: once more
+    // with that world.
     if let (true, "estimated", Some((accepted_ns, fit))) =
         (config.retrack_startup, world_reference, pass.world_fit)
     {
-        if let Some(until) =
-            retrack::retrack_until(&imu.buttons, config.strokes.draw_button_mask, accepted_ns)
-        {
-            let cfg = TrackerConfig {
-                world: Some(fit.reference),
-                ..tracker_cfg
-            };
-            let second = track_pass(&input, &rig, cfg, Some(until), &mut times)?;
-            pass = retrack::splice(pass, second, accepted_ns);
-        }
+        let until = retrack::replay_retrack_until(
+            &imu.buttons,
+            config.strokes.draw_button_mask,
+            accepted_ns,
+        );
+        let cfg = TrackerConfig {
+            world: Some(fit.reference),
+            ..tracker_cfg
+        };
+        let second = track_pass(&input, &rig, cfg, Some(until), &mut times)?;
+        pass = retrack::splice(pass, second, accepted_ns);
     }
     Ok(ReplayOutput {
         samples: pass.samples,
