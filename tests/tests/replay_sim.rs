@@ -39,6 +39,15 @@ fn track(
     (dir, reader, out, acc)
 }
 
+/// The replay with its start tracked once only (no second pass once the world is accepted).
+fn replay_without_retracking(reader: &RecordingReader) -> ReplayOutput {
+    let config = ReplayConfig {
+        retrack_startup: false,
+        ..ReplayConfig::default()
+    };
+    replay(reader, &config).expect("replay")
+}
+
 #[test]
 fn a_fires_v1_session_is_tracked_within_2mm_with_no_wrong_labels() {
     let (dir, reader, out, acc) = track("fires-v1", 6.0, 7);
@@ -196,14 +205,7 @@ fn the_speed_bounded_twin_test_accepts_no_wrong_label_over_many_seeds() {
 #[test]
 fn strokes_begun_before_the_world_is_accepted_are_retracked() {
     let (dir, reader, out, _) = track("webcam", 9.0, 1);
-    let first = replay(
-        &reader,
-        &ReplayConfig {
-            retrack_startup: false,
-            ..ReplayConfig::default()
-        },
-    )
-    .expect("replay");
+    let first = replay_without_retracking(&reader);
     let (accepted, _) = out.world_fit.expect("world accepted");
     let true_strokes = reader.strokes().expect("truth").expect("simulated");
     let boundary = &true_strokes[0];
@@ -260,14 +262,7 @@ fn strokes_begun_before_the_world_is_accepted_are_retracked() {
 fn the_start_of_a_session_without_early_strokes_is_retracked() {
     use fires_host::replay::report::tip_errors;
     let (dir, reader, out, _) = track("tip", 6.0, 1);
-    let first = replay(
-        &reader,
-        &ReplayConfig {
-            retrack_startup: false,
-            ..ReplayConfig::default()
-        },
-    )
-    .expect("replay");
+    let first = replay_without_retracking(&reader);
     let (accepted, _) = out.world_fit.expect("world accepted");
     let truth = reader.exposure_truth().expect("truth").expect("simulated");
     let within_2mm_before = |o: &ReplayOutput| {

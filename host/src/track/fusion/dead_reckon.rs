@@ -103,33 +103,18 @@ impl TipDeadReckoner {
         if !tip.iter().all(|v| v.is_finite()) {
             return;
         }
-        match self.position {
-            Some(p)
-                if t_ns > self.t_ns && t_ns - self.last_seen_ns < self.config.max_duration_ns =>
-            {
-                let dt = (t_ns - self.t_ns) as f64 * 1e-9;
-                let predicted = p + self.velocity * dt;
-                let r = tip - predicted;
-                if r.norm() > self.config.max_innovation_m {
-                    self.position = Some(*tip);
-                    self.velocity = Vector3::zeros();
-                } else {
-                    self.position = Some(predicted + r * self.config.alpha);
-                    let gain_dt = dt.max(self.config.min_velocity_dt_ns as f64 * 1e-9);
-                    self.velocity = clamp_norm(
-                        self.velocity + r * (self.config.beta / gain_dt),
-                        self.config.max_speed_mps,
-                    );
-                }
+        match self.innovation(t_ns, tip) {
+            Some((predicted, r, dt)) if r.norm() <= self.config.max_innovation_m => {
+                self.position = Some(predicted + r * self.config.alpha);
+                let gain_dt = dt.max(self.config.min_velocity_dt_ns as f64 * 1e-9);
+                self.velocity = clamp_norm(
+                    self.velocity + r * (self.config.beta / gain_dt),
+                    self.config.max_speed_mps,
+                );
             }
-            _ => {
-                self.position = Some(*tip);
-                self.velocity = Vector3::zeros();
-            }
+            _ => self.restart(tip),
         }
-        self.t_ns = t_ns.max(self.t_ns);
-        self.last_seen_ns = self.t_ns;
-        self.last_seen = *tip;
+        self.mark_seen(t_ns, tip);
     }
 
     /// A vision tip at `t_ns` with its velocity estimated elsewhere (the tracker's Kalman tip
@@ -145,21 +130,43 @@ impl TipDeadReckoner {
         if !tip.iter().all(|v| v.is_finite()) {
             return;
         }
-        let jumped = match self.position {
-            Some(p)
-                if t_ns > self.t_ns && t_ns - self.last_seen_ns < self.config.max_duration_ns =>
+        match self.innovation(t_ns, tip) {
+            Some((_, r, _))
+                if r.norm() <= self.config.max_innovation_m
+                    && velocity.iter().all(|v| v.is_finite()) =>
             {
-                let dt = (t_ns - self.t_ns) as f64 * 1e-9;
-                (tip - (p + self.velocity * dt)).norm() > self.config.max_innovation_m
+                self.position = Some(*tip);
+                self.velocity = clamp_norm(*velocity, self.config.max_speed_mps);
             }
-            _ => true,
-        };
+            _ => self.restart(tip),
+        }
+        self.mark_seen(t_ns, tip);
+    }
+
+    /// The prediction at `t_ns`, the tip's innovation from it and the step (s), when there is a
+    /// prediction within the time limit to compare with.
+    fn innovation(
+        &self,
+        t_ns: u64,
+        tip: &Vector3<f64>,
+    ) -> Option<(Vector3<f64>, Vector3<f64>, f64)> {
+        let p = self.position?;
+        if t_ns <= self.t_ns || t_ns - self.last_seen_ns >= self.config.max_duration_ns {
+            return None;
+        }
+        let dt = (t_ns - self.t_ns) as f64 * 1e-9;
+        let predicted = p + self.velocity * dt;
+        Some((predicted, tip - predicted, dt))
+    }
+
+    /// Starts over at `tip`, at rest (a first tip, or a re-acquisition).
+    fn restart(&mut self, tip: &Vector3<f64>) {
         self.position = Some(*tip);
-        self.velocity = if jumped || !velocity.iter().all(|v| v.is_finite()) {
-            Vector3::zeros()
-        } else {
-            clamp_norm(*velocity, self.config.max_speed_mps)
-        };
+        self.velocity = Vector3::zeros();
+    }
+
+    /// Records a vision tip at `t_ns` as the last one seen.
+    fn mark_seen(&mut self, t_ns: u64, tip: &Vector3<f64>) {
         self.t_ns = t_ns.max(self.t_ns);
         self.last_seen_ns = self.t_ns;
         self.last_seen = *tip;

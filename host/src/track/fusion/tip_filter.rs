@@ -246,8 +246,8 @@ mod tests {
         }
         // The filter's own steady-state velocity variance for white acceleration noise q and tips
         // of variance r every T is √2 q^¾ (r T)^¼ (σ 0.038 m/s here); a pen without the modelled
-        // acceleration does better (0.019). A filter ignoring the motion is 0.11 m/s off per axis while it moves,
-        // and an alpha-beta gain that does not know about gaps swung by ±0.4 m/s.
+        // acceleration does better (0.019). A filter ignoring the motion is 0.11 m/s off per axis
+        // while it moves, and an alpha-beta gain that does not know about gaps swung by ±0.4 m/s.
         let q = cfg.accel_sigma.powi(2);
         let r = cfg.measurement_sigma.powi(2);
         let sigma_v = (2f64.sqrt() * q.powf(0.75) * (r * period as f64 * 1e-9).powf(0.25)).sqrt();
