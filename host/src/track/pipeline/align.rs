@@ -12,6 +12,7 @@
 //! with its image velocity (Ait-Aider et al., "Simultaneous object pose and velocity computation
 //! using a single view from a rolling shutter camera", ECCV 2006, model the same per-row times).
 
+use self::motion::{rigid_translation, MeasuredTranslation};
 use super::line_order::{match_along_line, LineOrderOptions};
 use super::pattern::{PatternOptions, PenGuess};
 use super::pen_motion::{AccelHistory, GyroHistory};
@@ -215,39 +216,6 @@ impl TimeAlignment {
         self.accel.push(t_ns, accel);
     }
 
-    /// The image displacement of LED `k`'s blob in `frame` that the tip's measured acceleration
-    /// adds to moving it from `t1` by `s` (ns) at its mean velocity since `t0` (`mv = (t0, t1,
-    /// s)`, [`AccelHistory::move_part`]), less the constant-acceleration move of the image
-    /// acceleration those samples give over the blob's three frames (`frames`, ns); through the
-    /// projection at the frame's pen guess. None without a guess or samples covering them, and
-    /// for cameras faster than [`IMU_MOVE_MIN_INTERVAL_NS`].
-    fn imu_move_px(
-        &self,
-        rig: &StereoRig,
-        camera: CameraId,
-        frame: &KeptFrame,
-        k: usize,
-        (t0, t1, s): (f64, f64, f64),
-        frames: (f64, f64, f64),
-    ) -> Option<[f64; 2]> {
-        let g = frame.guess?;
-        if t1 - t0 < IMU_MOVE_MIN_INTERVAL_NS {
-            return None;
-        }
-        let dv = self
-            .accel
-            .mean_velocity_change(frames.0, frames.1, frames.2)?;
-        let seen = dv / (0.5 * (frames.2 - frames.0) * 1e-9);
-        let m = self.accel.move_part(t0, t1, s)? - seen * (0.5 * s * (t1 - t0 + s) * 1e-18);
-        let pen = &self.options.pen;
-        let led = g.tip - g.direction() * (pen.led_offsets[k] + pen.tip_offset);
-        let (a, b) = (
-            rig.project(camera, &led).ok()?,
-            rig.project(camera, &(led + m)).ok()?,
-        );
-        Some([b[0] - a[0], b[1] - a[1]])
-    }
-
     /// Keeps a gyro sample (pen frame, rad/s) for the turn part of the blobs' motion.
     pub(super) fn push_gyro(&mut self, t_ns: u64, rate: Vector3<f64>) {
         self.gyro.push(t_ns, rate);
@@ -418,26 +386,16 @@ impl TimeAlignment {
         );
         let project =
             |leds: Option<[Vector3<f64>; LED_COUNT]>, k: usize| rig.project(camera, &leds?[k]).ok();
-        // The image motion of LED k between two times that the pen's turn alone causes (the
-        // tip held where vision last saw it), from the frame's own guess turned by the gyro's
-        // rates; zero without them.
-        let pen = &self.options.pen;
+        // The image motion of LED k between two times that the pen's turn alone causes, zero
+        // without a guess or gyro samples ([`Self::turn_px`]).
         let turn = |k: usize, t0: f64, t1: f64| -> [f64; 2] {
-            let Some(g) = cur.guess else {
-                return [0.0; 2];
-            };
-            let lever = pen.led_offsets[k] + pen.tip_offset;
-            let at = |tt: f64| {
-                let r = self.gyro.rotation(cur.t_ns as f64, tt)?;
-                let d = g.orientation * r * Vector3::x();
-                rig.project(camera, &(g.tip - d * lever)).ok()
-            };
-            match (at(t0), at(t1)) {
-                (Some(a), Some(b)) => [b[0] - a[0], b[1] - a[1]],
-                _ => [0.0; 2],
-            }
+            self.turn_px(rig, camera, cur, k, t0, t1)
+                .unwrap_or([0.0; 2])
         };
         let mut out = Vec::new();
+        // The LEDs whose blobs measured the motion the turn does not explain (LED, that image
+        // velocity, the move's error), and the LEDs nothing measured (LED, blob, shift).
+        let (mut translations, mut unmeasured) = (Vec::new(), Vec::new());
         for (k, id) in cur_ids.iter().enumerate() {
             let Some(i) = *id else { continue };
             let b = cur.blobs[i];
@@ -506,6 +464,7 @@ impl TimeAlignment {
                 correction = [correction[0] + m[0], correction[1] + m[1]];
                 Some(v)
             });
+            let was_measured = measured.is_some();
             let v = measured.or_else(|| {
                 // One pose predicts no motion: the blob is not moved, and says so (None).
                 if !self.pen_velocity_known() {
@@ -516,17 +475,26 @@ impl TimeAlignment {
                 error_px = unmeasured_move_error(v, own_shift);
                 Some(v)
             });
-            if let Some(v) = v {
-                out.push(MovedBlob {
-                    blob: i,
-                    moved: [
-                        b[0] + v[0] * own_shift + correction[0],
-                        b[1] + v[1] * own_shift + correction[1],
-                    ],
+            let Some(v) = v else {
+                unmeasured.push((k, i, own_shift));
+                continue;
+            };
+            if was_measured {
+                translations.push(MeasuredTranslation {
+                    led: k,
                     velocity: v,
                     error_px,
                 });
             }
+            out.push(MovedBlob {
+                blob: i,
+                moved: [
+                    b[0] + v[0] * own_shift + correction[0],
+                    b[1] + v[1] * own_shift + correction[1],
+                ],
+                velocity: v,
+                error_px,
+            });
         }
         if out.is_empty() {
             if let Some(p) = prev {
@@ -551,6 +519,28 @@ impl TimeAlignment {
                     });
                 }
             }
+        }
+        // The pen is rigid: a blob that nothing measured (the frame before showed a reflection
+        // beside it) moves with the translation its LEDs' neighbours measured plus its own turn.
+        for (k, i, own_shift) in unmeasured {
+            let t0 = cur.blob_time(i);
+            let (Some(tv), Some(m)) = (
+                rigid_translation(&translations, &self.options.pen.led_offsets, k),
+                self.turn_px(rig, camera, cur, k, t0, t0 + own_shift),
+            ) else {
+                continue;
+            };
+            let b = cur.blobs[i];
+            let error_px = translations.iter().map(|x| x.error_px).fold(0.0, f64::max);
+            out.push(MovedBlob {
+                blob: i,
+                moved: [
+                    b[0] + tv[0] * own_shift + m[0],
+                    b[1] + tv[1] * own_shift + m[1],
+                ],
+                velocity: tv,
+                error_px,
+            });
         }
         out
     }
@@ -671,6 +661,8 @@ fn undistort_all(cam: &CameraModel, px: &[[f64; 2]], out: &mut Vec<[f64; 2]>) {
 
 #[path = "align_identities.rs"]
 mod identities;
+#[path = "align_motion.rs"]
+mod motion;
 #[cfg(test)]
 #[path = "align_tests.rs"]
 pub(super) mod tests;

@@ -283,6 +283,77 @@ fn a_turning_pens_blobs_are_moved_with_the_gyro() {
     assert!(run(false) > 1.0, "{}", run(false));
 }
 
+/// A pen drawing at 0.1 m/s while it turns at 3 rad/s, seen at 15 Hz, whose LED 1 had no
+/// identity in the frame before (a reflection beside it): the other three LEDs' blobs measure
+/// the translation, the gyro the turn, and LED 1's blob is moved with both to within what the
+/// measured LEDs themselves reach, where before it was not moved at all (and the pair was
+/// refused as unaligned).
+#[test]
+fn a_blob_without_a_measured_velocity_moves_with_the_rigid_pen() {
+    let rig = rig();
+    let rate = 3.0;
+    let velocity = Vector3::new(0.0, 0.1, 0.0);
+    let tip_at = |t: u64| Vector3::new(0.05, 0.02, 0.8) + velocity * (t as f64 * 1e-9);
+    let orientation = |t: u64| {
+        let angle = 0.4 + rate * t as f64 * 1e-9;
+        UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 0.5)
+            * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), angle)
+    };
+    // The gyro measures the rate in the pen's frame: the pen turns about its own z axis.
+    let offsets = OPTIONS.pen.led_offsets;
+    let images = |t: u64| -> Vec<[f64; 2]> {
+        let d = orientation(t) * Vector3::x();
+        offsets
+            .iter()
+            .map(|l| rig.project(CameraId::Right, &(tip_at(t) - d * *l)).unwrap())
+            .collect()
+    };
+    let run = |gyro: bool| {
+        let mut a = TimeAlignment::new(OPTIONS);
+        for k in 0..=30 {
+            if gyro {
+                a.push_gyro(k * 5_000_000, Vector3::new(0.0, 0.0, rate));
+            }
+        }
+        for (t, labels) in [
+            (10_000_000u64, [None, Some(1), Some(2), Some(3)]),
+            (76_000_000, [Some(0), Some(1), Some(2), Some(3)]),
+        ] {
+            a.push(1, t, images(t), Vec::new());
+            a.label(1, labels, [None; LED_COUNT]);
+            let guess = PenGuess {
+                tip: tip_at(t),
+                orientation: orientation(t),
+            };
+            a.set_guess(1, Some(guess));
+        }
+        let target = 106_000_000;
+        let want = images(target);
+        let error =
+            |m: &MovedBlob| (m.moved[0] - want[m.blob][0]).hypot(m.moved[1] - want[m.blob][1]);
+        let moved = a.alignment(&rig, 1, target);
+        let led1 = moved.iter().find(|m| m.blob == 0).map(error);
+        let others = moved
+            .iter()
+            .filter(|m| m.blob != 0)
+            .map(error)
+            .fold(0.0, f64::max);
+        (led1, others)
+    };
+    let now = images(76_000_000);
+    let later = images(106_000_000);
+    let motion = (later[0][0] - now[0][0]).hypot(later[0][1] - now[0][1]);
+    let (led1, others) = run(true);
+    let led1 = led1.expect("LED 1 is moved");
+    assert!(motion > 3.0, "LED 1 moves {motion} px");
+    assert!(
+        led1 <= others + 0.05 && led1 < 0.2,
+        "LED 1 {led1} px, the others {others} px"
+    );
+    // Without the gyro nothing tells LED 1's own motion: it is not moved.
+    assert_eq!(run(false).0, None);
+}
+
 /// Blobs moving at constant image velocity are moved exactly to the target time, using the
 /// velocity between the labelled previous and current frame.
 #[test]
