@@ -197,11 +197,12 @@ impl Session {
         // fraction of a second on a webcam rig, so it is shown live but never drawn into a stroke;
         // a gap between vision tips becomes a split into pieces (docs/strokes.md).
         if matches!(s.quality, TrackQuality::Vision { .. }) {
-            // The vision tip as the tracker reports it (the tip filter's when enabled: on fires-v1
-            // it gives 0.42-0.56 mm stroke RMS medians against 0.48-0.62 from the raw tips; its
-            // uncertainty is at most the frame's own
-            // `tip_sigma_m`); the end-of-stroke spline smooths it over the stroke.
-            self.segmenter.tip_with_sigma(s.t_ns, s.tip, s.tip_sigma_m);
+            // The vision tip along the stroke axis as the tracker reports it (the tip filter's when
+            // enabled: on fires-v1 it gives 0.42-0.56 mm stroke RMS medians against 0.48-0.62 from
+            // the raw tips; its uncertainty is at most the frame's own `stroke_tip_sigma_m`); the
+            // end-of-stroke spline smooths it over the stroke.
+            self.segmenter
+                .tip_with_sigma(s.t_ns, s.stroke_tip, s.stroke_tip_sigma_m);
         }
         let display_tip = s.tip.map(|p| self.smoother.push(s.t_ns, p));
         SessionSample {

@@ -224,6 +224,8 @@ mod tests {
             confidence: 1.0,
             interference: 0,
             tip_sigma_m: None,
+            stroke_tip: None,
+            stroke_tip_sigma_m: None,
         };
         let samples = [
             sample([None, at(1), None, at(3)], TrackQuality::Vision { leds: 2 }),

@@ -38,13 +38,15 @@ pub struct ReplayConfig {
     pub retrack_startup: bool,
 }
 
-/// The tip's axis for cameras delivering `content`. Measured on 60 s sessions (the closing note
-/// of the webcam-physics change): on image cameras the least-squares axis of the labelled LEDs
-/// gives strokes about half as far from the pen's path as the fused axis (`webcam` seeds 1, 3, 4:
-/// median stroke RMS 0.37 / 0.28 / 0.59 mm against 0.69 / 0.63 / 1.09; `fires-v2` seed 1: 2.59
-/// against 2.86 mm), whose error is correlated over a stroke where the vision axis's noise is
-/// smoothed away; on the Wii-like blob cameras the fused axis is better (`fires-v1` seed 1: 0.49
-/// against 0.57 mm).
+/// The live tip's axis for cameras delivering `content` (strokes are drawn along the vision axis
+/// on every rig, [`TrackerConfig::stroke_direction_source`]). Measured on 60 s sessions (the
+/// closing note of the webcam-physics change): on image cameras the least-squares axis of the
+/// labelled LEDs gives strokes about half as far from the pen's path as the fused axis (`webcam`
+/// seeds 1, 3, 4: median stroke RMS 0.37 / 0.28 / 0.59 mm against 0.69 / 0.63 / 1.09;
+/// `fires-v2` seed 1: 2.59 against 2.86 mm), whose error is correlated over a stroke where the
+/// vision axis's noise is smoothed away; on the Wii-like blob cameras the fused axis keeps the
+/// display steadier (`fires-v1` seeds 1-8: jitter at rest 0.17-0.34 mm against 0.22-0.63 mm on
+/// the vision axis).
 pub fn tip_axis_for(content: FrameContent) -> DirectionSource {
     match content {
         FrameContent::Images => DirectionSource::Vision,

@@ -171,6 +171,14 @@ pub struct TrackSample {
     /// only; None when unknown).
     #[serde(default)]
     pub tip_sigma_m: Option<f64>,
+    /// The tip strokes are drawn from (vision samples only): along
+    /// [`TrackerConfig::stroke_direction_source`], filtered as `tip` is; `tip` itself when both
+    /// use one axis.
+    #[serde(default)]
+    pub stroke_tip: Option<[f64; 3]>,
+    /// Expected per-axis noise of `stroke_tip`'s unfiltered tip, metres (as `tip_sigma_m`).
+    #[serde(default)]
+    pub stroke_tip_sigma_m: Option<f64>,
 }
 
 impl TrackSample {
@@ -186,6 +194,8 @@ impl TrackSample {
             confidence: 0.0,
             interference: 0,
             tip_sigma_m: None,
+            stroke_tip: None,
+            stroke_tip_sigma_m: None,
         }
     }
 }
@@ -211,6 +221,8 @@ pub struct Tracker {
     labels: LabelGuard,
     reckoner: TipDeadReckoner,
     tip_filter: TipFilter,
+    /// The filter of the stroke axis's tips, when strokes and display use different axes.
+    stroke_filter: Option<TipFilter>,
     /// The rig's measured blob-centroid noise, which scales the tip's expected noise.
     pixel_noise: PixelNoise,
     last_gyro: Option<(u64, Vector3<f64>)>,
@@ -243,6 +255,8 @@ impl Tracker {
             // Until a reference is known the dead reckoner runs in the default frame.
             reckoner: TipDeadReckoner::new(config.dead_reckon, config.world.unwrap_or_default()),
             tip_filter: TipFilter::new(config.tip_filter),
+            stroke_filter: (config.stroke_direction_source != config.direction_source)
+                .then(|| TipFilter::new(config.tip_filter)),
             pixel_noise: PixelNoise::new(config.correspondence.pixel_sigma),
             last_gyro: None,
             tip_accel: None,
@@ -310,6 +324,9 @@ impl Tracker {
         ) {
             let linear = q * self.tip_specific_force(sample) - world.up() * world.gravity;
             self.tip_filter.push_accel(sample.t_ns, linear);
+            if let Some(f) = &mut self.stroke_filter {
+                f.push_accel(sample.t_ns, linear);
+            }
             self.align.push_accel(sample.t_ns, linear);
             self.tip_accel = Some((sample.t_ns, linear));
         }
@@ -498,22 +515,12 @@ impl Tracker {
         let variance =
             prior::direction_variance(&self.config.pen.led_offsets, cands, id, &vision.direction);
         self.direction.correct(t, &vision.direction, variance);
-        let estimate = match (self.config.direction_source, self.direction.fused(t)) {
-            (DirectionSource::Fused, Some(d)) => self
-                .tip
-                .estimate_with_direction(&id.points, &d)
-                .unwrap_or(vision),
-            _ => vision,
-        };
+        let estimate = self.estimate_along(self.config.direction_source, t, id, vision);
         self.direction.mark_vision(t);
         self.remember_labels(this, t, id, &estimate);
         self.last_vision_tip = Some((t, estimate.tip));
         self.occluded = false;
-        let fused_axis = self.config.direction_source == DirectionSource::Fused
-            && self.direction.fused(t).is_some();
-        let sigma = self
-            .tip_sigma(id, &estimate, variance, fused_axis)
-            .map(|s| s * self.pixel_noise.scale());
+        let sigma = self.scaled_tip_sigma(self.config.direction_source, t, id, &estimate, variance);
         let filtered = self.tip_filter.update(t, &estimate.tip, sigma);
         // Occlusions are extrapolated from the Kalman filter's state, whose velocity weighs each
         // tip by its noise and the time since the last one (an alpha-beta gain does not know an
@@ -526,6 +533,9 @@ impl Tracker {
         } else {
             estimate.tip
         };
+        let (stroke_tip, stroke_sigma) = self
+            .stroke_tip(t, id, vision, variance)
+            .unwrap_or((tip, sigma));
         let cands = &self.correspondences.candidates;
         TrackSample {
             t_ns: t,
@@ -540,7 +550,66 @@ impl Tracker {
             confidence: id.confidence,
             interference: id.interference,
             tip_sigma_m: sigma,
+            stroke_tip: Some(stroke_tip.into()),
+            stroke_tip_sigma_m: stroke_sigma,
         }
+    }
+
+    /// The eq. 4.13 tip of a labelled pair along `source`'s axis: the fused direction when the
+    /// filter has one, else the vision axis (`vision`).
+    fn estimate_along(
+        &self,
+        source: DirectionSource,
+        t: u64,
+        id: &Identification,
+        vision: TipEstimate,
+    ) -> TipEstimate {
+        match (source, self.direction.fused(t)) {
+            (DirectionSource::Fused, Some(d)) => self
+                .tip
+                .estimate_with_direction(&id.points, &d)
+                .unwrap_or(vision),
+            _ => vision,
+        }
+    }
+
+    /// [`Self::tip_sigma`] of a tip along `source`'s axis, scaled to the rig's measured centroid
+    /// noise.
+    fn scaled_tip_sigma(
+        &self,
+        source: DirectionSource,
+        t: u64,
+        id: &Identification,
+        estimate: &TipEstimate,
+        axis_variance: Option<f64>,
+    ) -> Option<f64> {
+        let fused_axis = source == DirectionSource::Fused && self.direction.fused(t).is_some();
+        self.tip_sigma(id, estimate, axis_variance, fused_axis)
+            .map(|s| s * self.pixel_noise.scale())
+    }
+
+    /// The stroke axis's tip and its noise when strokes and display use different axes
+    /// ([`TrackerConfig::stroke_direction_source`]), through its own filter; None when they
+    /// share the display's tip.
+    fn stroke_tip(
+        &mut self,
+        t: u64,
+        id: &Identification,
+        vision: TipEstimate,
+        axis_variance: Option<f64>,
+    ) -> Option<(Vector3<f64>, Option<f64>)> {
+        self.stroke_filter.as_ref()?;
+        let source = self.config.stroke_direction_source;
+        let estimate = self.estimate_along(source, t, id, vision);
+        let sigma = self.scaled_tip_sigma(source, t, id, &estimate, axis_variance);
+        let filter = self.stroke_filter.as_mut()?;
+        let filtered = filter.update(t, &estimate.tip, sigma);
+        let tip = if self.config.tip_filter.enabled {
+            filtered
+        } else {
+            estimate.tip
+        };
+        Some((tip, sigma))
     }
 
     /// Where the pen is believed to be at `t` for labelling a frame by its pattern: the last

@@ -52,8 +52,15 @@ pub struct TrackerConfig {
     /// Position of the tip relative to the IMU in the pen frame, metres (lever arm for the
     /// tip filter's acceleration input).
     pub imu_to_tip: [f64; 3],
-    /// Axis used for the tip.
+    /// Axis used for the tip (the one shown live, dead-reckoned and filtered for the display).
     pub direction_source: DirectionSource,
+    /// Axis of the tips strokes are drawn from ([`TrackSample::stroke_tip`]): the end-of-stroke
+    /// spline smooths the vision axis's frame-to-frame noise away, where the fused axis's slowly
+    /// varying error (a fraction of a degree from three LEDs, a millimetre at the tip) stays in
+    /// the stroke; the display, which nothing smooths afterwards, is steadier on the fused axis.
+    ///
+    /// [`TrackSample::stroke_tip`]: super::TrackSample::stroke_tip
+    pub stroke_direction_source: DirectionSource,
     /// Frames of the two cameras further apart than this are not paired, nanoseconds.
     pub max_pair_dt_ns: u64,
     /// Added to right-camera timestamps to express them on the left camera's clock, nanoseconds.
@@ -136,6 +143,7 @@ impl Default for TrackerConfig {
             tip_filter: TipFilterConfig::default(),
             imu_to_tip: [0.0; 3],
             direction_source: DirectionSource::Fused,
+            stroke_direction_source: DirectionSource::Vision,
             max_pair_dt_ns: 40_000_000,
             right_clock_offset_ns: 0,
             time_align: true,

@@ -16,6 +16,8 @@ struct RunStats {
     lost: usize,
     clock_offset_ns: i64,
     world_fit: Option<(u64, WorldFit)>,
+    /// The vision samples themselves, parallel to `errors`.
+    vision_samples: Vec<TrackSample>,
 }
 
 /// 10 s of a moving pen: IMU at 200 Hz, each camera at 60 Hz with the right camera 7 ms late,
@@ -52,6 +54,7 @@ fn simulate_clock(
         lost: 0,
         clock_offset_ns: 0,
         world_fit: None,
+        vision_samples: Vec::new(),
     };
     let (imu_dt, cam_dt, right_delay) = (5_000_000u64, 16_666_667u64, 7_000_000u64);
     let mut events: Vec<(u64, u8)> = Vec::new();
@@ -113,6 +116,7 @@ fn simulate_clock(
                     .errors
                     .push((Vector3::from(s.tip.unwrap()) - tip).norm());
                 stats.vision_t.push(s.t_ns as f64 * 1e-9);
+                stats.vision_samples.push(s);
                 let leds = pen.led_positions(&truth.led1, &truth.rotation);
                 // A label is wrong when the point is nearer another LED than its own.
                 for (i, p) in s.leds.iter().enumerate() {
@@ -245,6 +249,59 @@ fn tip_from_leds_2_to_4_with_fusion() {
     );
     assert_eq!(fused.wrong_labels, 0);
     assert!(pf >= 0.9 && pf > pv);
+}
+
+/// Strokes are drawn along the vision axis while the live tip takes the fused one (the
+/// default): with the tip filters off, every vision sample's stroke tip lies on the
+/// least-squares line of its labelled LEDs (eq. 4.13 as printed), where the live tip leaves it
+/// by the fused axis's difference; with one axis for both, the two tips are the same.
+#[test]
+fn strokes_take_the_vision_axis_and_the_display_the_fused_one() {
+    let unfiltered = TrackerConfig {
+        tip_filter: crate::track::fusion::TipFilterConfig {
+            enabled: false,
+            ..Default::default()
+        },
+        ..TrackerConfig::default()
+    };
+    assert_eq!(
+        (
+            unfiltered.direction_source,
+            unfiltered.stroke_direction_source
+        ),
+        (DirectionSource::Fused, DirectionSource::Vision)
+    );
+    let off_line = |p: [f64; 3], s: &TrackSample| -> f64 {
+        let pts: Vec<Vector3<f64>> = s.leds.iter().flatten().map(|&q| q.into()).collect();
+        let c = pts.iter().sum::<Vector3<f64>>() / pts.len() as f64;
+        let scatter = pts.iter().fold(nalgebra::Matrix3::zeros(), |m, q| {
+            m + (q - c) * (q - c).transpose()
+        });
+        let axis = scatter.symmetric_eigen();
+        let (k, _) = axis.eigenvalues.argmax();
+        let d = axis.eigenvectors.column(k).into_owned();
+        let r = Vector3::from(p) - c;
+        (r - d * r.dot(&d)).norm()
+    };
+    let split = simulate(unfiltered.clone(), 6.0, None, 3);
+    assert!(split.vision_samples.len() > 300);
+    let (mut on, mut live_off) = (0.0f64, Vec::new());
+    for s in &split.vision_samples {
+        on = on.max(off_line(s.stroke_tip.unwrap(), s));
+        live_off.push(off_line(s.tip.unwrap(), s));
+    }
+    let live_median = median(&mut live_off);
+    assert!(on < 1e-9, "stroke tip {on} m off the LEDs' line");
+    assert!(live_median > 1e-5, "live tip {live_median} m off it");
+    let shared = TrackerConfig {
+        stroke_direction_source: DirectionSource::Fused,
+        ..unfiltered
+    };
+    let one = simulate(shared, 3.0, None, 3);
+    assert!(one
+        .vision_samples
+        .iter()
+        .all(|s| s.stroke_tip == s.tip && s.stroke_tip_sigma_m == s.tip_sigma_m));
 }
 
 fn median(v: &mut [f64]) -> f64 {
