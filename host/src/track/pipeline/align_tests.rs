@@ -596,3 +596,28 @@ fn unlabelled_blobs_on_the_pen_line_move_with_their_velocity() {
     a.push(1, 142_000_000, off, Vec::new());
     assert!(a.alignment(&rig, 1, 150_000_000).is_empty());
 }
+
+/// The rigid pen's translation at an LED nothing measured: a velocity field linear in the LEDs'
+/// offsets is reproduced exactly at LED 1 from LEDs 2-4, one measured LED gives its own velocity,
+/// and none gives nothing.
+#[test]
+fn the_rigid_translation_follows_a_line_in_the_led_offsets() {
+    let offsets = OPTIONS.pen.led_offsets;
+    let field = |s: f64| [1e-7 + 4e-7 * s, -2e-7 + 1e-6 * s];
+    let measured: Vec<MeasuredTranslation> = (1..LED_COUNT)
+        .map(|k| MeasuredTranslation {
+            led: k,
+            velocity: field(offsets[k]),
+            error_px: 0.1 * k as f64,
+        })
+        .collect();
+    let v = rigid_translation(&measured, &offsets, 0).unwrap();
+    let want = field(offsets[0]);
+    assert!(
+        (v[0] - want[0]).abs() < 1e-20 && (v[1] - want[1]).abs() < 1e-20,
+        "{v:?}"
+    );
+    let one = rigid_translation(&measured[1..2], &offsets, 0).unwrap();
+    assert_eq!(one, measured[1].velocity);
+    assert_eq!(rigid_translation(&[], &offsets, 0), None);
+}
