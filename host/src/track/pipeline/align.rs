@@ -486,15 +486,7 @@ impl TimeAlignment {
                     error_px,
                 });
             }
-            out.push(MovedBlob {
-                blob: i,
-                moved: [
-                    b[0] + v[0] * own_shift + correction[0],
-                    b[1] + v[1] * own_shift + correction[1],
-                ],
-                velocity: v,
-                error_px,
-            });
+            out.push(MovedBlob::new(i, b, v, own_shift, correction, error_px));
         }
         if out.is_empty() {
             if let Some(p) = prev {
@@ -511,17 +503,14 @@ impl TimeAlignment {
                         continue;
                     }
                     let v = [(b[0] - a[0]) / dt, (b[1] - a[1]) / dt];
-                    out.push(MovedBlob {
-                        blob: i,
-                        moved: [b[0] + v[0] * own_shift, b[1] + v[1] * own_shift],
-                        velocity: v,
-                        error_px: unmeasured_move_error(v, own_shift),
-                    });
+                    let error_px = unmeasured_move_error(v, own_shift);
+                    out.push(MovedBlob::new(i, b, v, own_shift, [0.0; 2], error_px));
                 }
             }
         }
         // The pen is rigid: a blob that nothing measured (the frame before showed a reflection
         // beside it) moves with the translation its LEDs' neighbours measured plus its own turn.
+        let error_px = translations.iter().map(|x| x.error_px).fold(0.0, f64::max);
         for (k, i, own_shift) in unmeasured {
             let t0 = cur.blob_time(i);
             let (Some(tv), Some(m)) = (
@@ -530,17 +519,7 @@ impl TimeAlignment {
             ) else {
                 continue;
             };
-            let b = cur.blobs[i];
-            let error_px = translations.iter().map(|x| x.error_px).fold(0.0, f64::max);
-            out.push(MovedBlob {
-                blob: i,
-                moved: [
-                    b[0] + tv[0] * own_shift + m[0],
-                    b[1] + tv[1] * own_shift + m[1],
-                ],
-                velocity: tv,
-                error_px,
-            });
+            out.push(MovedBlob::new(i, cur.blobs[i], tv, own_shift, m, error_px));
         }
         out
     }
@@ -606,6 +585,29 @@ pub(super) struct MovedBlob {
     pub(super) velocity: [f64; 2],
     /// The move's error that the blob's image acceleration predicts, pixels (0 when unmeasured).
     pub(super) error_px: f64,
+}
+
+impl MovedBlob {
+    /// Blob `blob` at `at` (pixels) moved by `shift` (ns) at `velocity` (px/ns), plus
+    /// `correction` (pixels: the parts of the move no constant velocity explains).
+    fn new(
+        blob: usize,
+        at: [f64; 2],
+        velocity: [f64; 2],
+        shift: f64,
+        correction: [f64; 2],
+        error_px: f64,
+    ) -> Self {
+        MovedBlob {
+            blob,
+            moved: [
+                at[0] + velocity[0] * shift + correction[0],
+                at[1] + velocity[1] * shift + correction[1],
+            ],
+            velocity,
+            error_px,
+        }
+    }
 }
 
 /// The error of moving a blob by `shift` (ns) with the velocity measured over the `dt` (ns)
